@@ -1,0 +1,73 @@
+// The XPBD (compliance) forms of the scalar kernels (Macklin, Müller, Chentanez 2016,
+// "XPBD: Position-Based Simulation of Compliant Constrained Dynamics", eq. 17-18).
+//
+// Each constraint keeps a Lagrange multiplier λ that the caller resets to 0 at the start of a
+// time step and passes back on every iteration. With α̃ = compliance / dt²:
+//     Δλ = (-C - α̃ λ) / (Σ_j w_j |∇_j C|² + α̃),   λ ← λ + Δλ,   Δp_i = w_i Δλ ∇_i C.
+// Compliance is the inverse stiffness (m/N for a distance constraint); compliance 0 is a hard
+// constraint and equals one PBD projection with stiffness 1. The constraint functions,
+// gradients, vertex orders and degenerate cases are those of the PositionBasedDynamics
+// function of the same name. On false (degenerate input, dt ≤ 0, negative compliance) the
+// corrections are zero and λ is left unchanged.
+#pragma once
+
+#include <tessera/core/real.hpp>
+
+namespace tessera {
+
+class XPBD {
+ public:
+  /// C = |p0 - p1| - l0.
+  static bool solve_DistanceConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
+                                       Real invMass1, const Real restLength,
+                                       const Real compliance, const Real dt, Real& lambda,
+                                       Vector3r& corr0, Vector3r& corr1);
+
+  /// C = acos(n̂1 · n̂2) - φ0 (vertex order of PositionBasedDynamics::solve_DihedralConstraint).
+  static bool solve_DihedralConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
+                                       Real invMass1, const Vector3r& p2, Real invMass2,
+                                       const Vector3r& p3, Real invMass3, const Real restAngle,
+                                       const Real compliance, const Real dt, Real& lambda,
+                                       Vector3r& corr0, Vector3r& corr1, Vector3r& corr2,
+                                       Vector3r& corr3);
+
+  /// C = (1/6) ((p1 - p0) × (p2 - p0)) · (p3 - p0) - V0.
+  static bool solve_VolumeConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
+                                     Real invMass1, const Vector3r& p2, Real invMass2,
+                                     const Vector3r& p3, Real invMass3, const Real restVolume,
+                                     const Real compliance, const Real dt, Real& lambda,
+                                     Vector3r& corr0, Vector3r& corr1, Vector3r& corr2,
+                                     Vector3r& corr3);
+
+  /// Same Q as PositionBasedDynamics::init_IsometricBendingConstraint.
+  static bool init_IsometricBendingConstraint(const Vector3r& p0, const Vector3r& p1,
+                                              const Vector3r& p2, const Vector3r& p3,
+                                              Matrix4r& Q);
+
+  /// C = ½ Σ_ij Q_ij p_i · p_j.
+  static bool solve_IsometricBendingConstraint(const Vector3r& p0, Real invMass0,
+                                               const Vector3r& p1, Real invMass1,
+                                               const Vector3r& p2, Real invMass2,
+                                               const Vector3r& p3, Real invMass3,
+                                               const Matrix4r& Q, const Real compliance,
+                                               const Real dt, Real& lambda, Vector3r& corr0,
+                                               Vector3r& corr1, Vector3r& corr2,
+                                               Vector3r& corr3);
+
+  /// St. Venant–Kirchhoff tetrahedron as an XPBD constraint. The elastic energy is
+  /// E · V · ψ₁(F), where ψ₁ is the energy density of computeGreenStrainAndPiolaStress for
+  /// Young's modulus 1 and the given Poisson ratio. Writing it as ½ α⁻¹ C² gives
+  ///   C = sqrt(2 V ψ₁(F)),   ∇C = V ∇ψ₁ / C,   α = compliance = 1 / E.
+  /// handleInversion selects the inversion-robust material as in the PBD form. At the rest
+  /// shape (C below the degenerate tolerance) the gradient is undefined: the corrections are
+  /// zero and true is returned. Returns false for ν ∉ (-1, 0.5).
+  static bool solve_FEMTetraConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
+                                       Real invMass1, const Vector3r& p2, Real invMass2,
+                                       const Vector3r& p3, Real invMass3, const Real restVolume,
+                                       const Matrix3r& invRestMat, const Real poissonRatio,
+                                       const Real compliance, const bool handleInversion,
+                                       const Real dt, Real& lambda, Vector3r& corr0,
+                                       Vector3r& corr1, Vector3r& corr2, Vector3r& corr3);
+};
+
+}  // namespace tessera

@@ -1,0 +1,2 @@
+// (being written)
+#include <tessera/core/position_based_dynamics.hpp>

@@ -1,0 +1,2 @@
+// (being written)
+#include "test_support.hpp"

@@ -1,0 +1,192 @@
+// Shared helpers of the test suite: seeded random input, rigid motions, finite-difference
+// gradients, and the invariant checks every kernel test makes (momentum, static particles,
+// corrections along the inverse-mass-weighted gradient, finiteness).
+//
+// Tolerances follow Real: tests run in both precisions, so they compare against
+// kTolerance-style constants from here instead of literals.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cmath>
+#include <random>
+#include <span>
+#include <vector>
+
+#include <tessera/core/real.hpp>
+
+namespace tessera::test {
+
+/// Round-off scale of Real: about 1e-7 for float, 1e-16 for double.
+inline constexpr Real kEpsilon = std::numeric_limits<Real>::epsilon();
+/// Relative tolerance for results that should agree "to round-off" after a few dozen flops.
+inline constexpr Real kRoundOff = kDoublePrecision ? Real(1e-11) : Real(2e-4);
+/// Central-difference step and the tolerance of a finite-difference gradient check
+/// (truncation error h² plus cancellation ε/h, relative to the gradient's scale).
+inline constexpr Real kFiniteDifferenceStep = kDoublePrecision ? Real(1e-6) : Real(2e-3);
+inline constexpr Real kFiniteDifferenceTolerance = kDoublePrecision ? Real(1e-6) : Real(2e-2);
+
+/// A deterministic random source for test input.
+class Random {
+ public:
+  explicit Random(unsigned seed = 12345) : engine_(seed) {}
+
+  Real uniform(Real lo, Real hi) { return std::uniform_real_distribution<Real>(lo, hi)(engine_); }
+  int integer(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(engine_); }
+  Vector3r vector(Real lo = -1, Real hi = 1) {
+    return Vector3r(uniform(lo, hi), uniform(lo, hi), uniform(lo, hi));
+  }
+  Vector3r unit_vector() {
+    for (;;) {
+      const Vector3r v = vector();
+      const Real n = v.norm();
+      if (n > Real(0.1) && n <= 1) return v / n;
+    }
+  }
+  /// A uniformly random rotation.
+  Matrix3r rotation() {
+    const Eigen::Quaternion<Real> q(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1),
+                                    uniform(-1, 1));
+    return q.normalized().toRotationMatrix();
+  }
+  /// An inverse mass in [0.5, 2].
+  Real inverse_mass() { return uniform(Real(0.5), Real(2)); }
+
+ private:
+  std::mt19937 engine_;
+};
+
+/// Central-difference gradient of a scalar function of N points.
+template <int N, class F>
+std::array<Vector3r, N> numeric_gradient(F&& f, const std::array<Vector3r, N>& x,
+                                         Real h = kFiniteDifferenceStep) {
+  std::array<Vector3r, N> grad;
+  for (int i = 0; i < N; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      std::array<Vector3r, N> plus = x, minus = x;
+      plus[i][k] += h;
+      minus[i][k] -= h;
+      grad[i][k] = (f(plus) - f(minus)) / (2 * h);
+    }
+  }
+  return grad;
+}
+
+/// Largest |v| over a set of vectors.
+template <class Vectors>
+Real max_norm(const Vectors& v) {
+  Real m = 0;
+  for (const auto& x : v) m = std::max(m, Real(x.norm()));
+  return m;
+}
+
+/// Every component finite.
+template <class Vectors>
+::testing::AssertionResult all_finite(const Vectors& v) {
+  for (std::size_t i = 0; i < std::size(v); ++i)
+    if (!v[i].allFinite())
+      return ::testing::AssertionFailure() << "entry " << i << " is not finite: "
+                                           << v[i].transpose();
+  return ::testing::AssertionSuccess();
+}
+
+/// Σ m_i Δp_i = 0 over the movable particles (all w_i > 0), relative to Σ m_i |Δp_i|.
+template <std::size_t N>
+::testing::AssertionResult conserves_linear_momentum(const std::array<Vector3r, N>& corr,
+                                                     const std::array<Real, N>& inv_mass,
+                                                     Real tolerance = kRoundOff) {
+  Vector3r momentum = Vector3r::Zero();
+  Real scale = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    momentum += corr[i] / inv_mass[i];
+    scale += corr[i].norm() / inv_mass[i];
+  }
+  if (momentum.norm() <= tolerance * std::max(scale, Real(1e-30)) + kEpsilon)
+    return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "Σ m Δp = " << momentum.transpose()
+                                       << " (scale " << scale << ")";
+}
+
+/// Σ m_i (x_i - c) × Δp_i = 0 (c the centre of mass), to first order: the check allows an
+/// error proportional to |Δp|² since rigid invariance only makes the linearised change
+/// torque-free.
+template <std::size_t N>
+::testing::AssertionResult conserves_angular_momentum(const std::array<Vector3r, N>& x,
+                                                      const std::array<Vector3r, N>& corr,
+                                                      const std::array<Real, N>& inv_mass,
+                                                      Real tolerance = kRoundOff) {
+  Vector3r centre = Vector3r::Zero();
+  Real mass = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    centre += x[i] / inv_mass[i];
+    mass += 1 / inv_mass[i];
+  }
+  centre /= mass;
+  Vector3r torque = Vector3r::Zero();
+  Real scale = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    torque += (x[i] - centre).cross(corr[i]) / inv_mass[i];
+    scale += (x[i] - centre).norm() * corr[i].norm() / inv_mass[i];
+  }
+  if (torque.norm() <= tolerance * std::max(scale, Real(1e-30)) + kEpsilon)
+    return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "Σ m (x - c) × Δp = " << torque.transpose()
+                                       << " (scale " << scale << ")";
+}
+
+/// Δp_i = -s · w_i · g_i for one scalar s shared by all particles, where g is a reference
+/// gradient (typically from numeric_gradient). Fits s by least squares and checks the
+/// residual relative to |Δp|; also returns success for all-zero corrections only when
+/// allow_zero is set.
+template <std::size_t N>
+::testing::AssertionResult along_weighted_gradient(const std::array<Vector3r, N>& corr,
+                                                   const std::array<Real, N>& inv_mass,
+                                                   const std::array<Vector3r, N>& grad,
+                                                   Real tolerance = kFiniteDifferenceTolerance,
+                                                   Real* fitted_scale = nullptr) {
+  Real num = 0, den = 0, corr_scale = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    const Vector3r d = inv_mass[i] * grad[i];
+    num += -corr[i].dot(d);
+    den += d.squaredNorm();
+    corr_scale += corr[i].squaredNorm();
+  }
+  if (den == 0 || corr_scale == 0)
+    return ::testing::AssertionFailure() << "zero gradient or zero correction";
+  const Real s = num / den;
+  if (fitted_scale) *fitted_scale = s;
+  Real residual = 0;
+  for (std::size_t i = 0; i < N; ++i)
+    residual += (corr[i] + s * inv_mass[i] * grad[i]).squaredNorm();
+  if (std::sqrt(residual) <= tolerance * std::sqrt(corr_scale))
+    return ::testing::AssertionSuccess();
+  ::testing::AssertionResult failure = ::testing::AssertionFailure();
+  failure << "corrections are not along -w∇C: relative residual "
+          << std::sqrt(residual / corr_scale) << "\n";
+  for (std::size_t i = 0; i < N; ++i)
+    failure << "  corr[" << i << "] = " << corr[i].transpose() << "   -s w ∇C = "
+            << (-s * inv_mass[i] * grad[i]).transpose() << "\n";
+  return failure;
+}
+
+/// Apply a rigid motion x ↦ R x + t to every point.
+template <std::size_t N>
+std::array<Vector3r, N> transformed(const std::array<Vector3r, N>& x, const Matrix3r& R,
+                                    const Vector3r& t) {
+  std::array<Vector3r, N> y;
+  for (std::size_t i = 0; i < N; ++i) y[i] = R * x[i] + t;
+  return y;
+}
+
+/// |a - b| ≤ tolerance · max(1, |a|, |b|), componentwise over the vector.
+inline ::testing::AssertionResult near_relative(const Vector3r& a, const Vector3r& b,
+                                                Real tolerance = kRoundOff) {
+  const Real scale = std::max({Real(1), a.norm(), b.norm()});
+  if ((a - b).norm() <= tolerance * scale) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << a.transpose() << " vs " << b.transpose()
+                                       << " (|diff| " << (a - b).norm() << ")";
+}
+
+}  // namespace tessera::test

@@ -1,2 +1,228 @@
-// (being written)
+// Tests of the distance constraint, PBD and XPBD forms: known answers, momentum, static
+// particles, rigid-motion invariance, the direction of the correction against a
+// finite-difference gradient, one-step satisfaction, degenerate input and the XPBD multiplier.
+#include <tessera/core/position_based_dynamics.hpp>
+#include <tessera/core/xpbd.hpp>
+
 #include "test_support.hpp"
+
+namespace tessera::test {
+namespace {
+
+using Points = std::array<Vector3r, 2>;
+using Masses = std::array<Real, 2>;
+
+struct Projection {
+  bool ok = false;
+  Points corr;
+};
+
+Projection project(const Points& x, const Masses& w, Real rest_length, Real stiffness) {
+  Projection r;
+  r.ok = PositionBasedDynamics::solve_DistanceConstraint(x[0], w[0], x[1], w[1], rest_length,
+                                                         stiffness, r.corr[0], r.corr[1]);
+  return r;
+}
+
+Projection project_xpbd(const Points& x, const Masses& w, Real rest_length, Real compliance,
+                        Real dt, Real& lambda) {
+  Projection r;
+  r.ok = XPBD::solve_DistanceConstraint(x[0], w[0], x[1], w[1], rest_length, compliance, dt,
+                                        lambda, r.corr[0], r.corr[1]);
+  return r;
+}
+
+Real distance_constraint(const Points& x, Real rest_length) {
+  return (x[0] - x[1]).norm() - rest_length;
+}
+
+Points applied(const Points& x, const Points& corr) { return {x[0] + corr[0], x[1] + corr[1]}; }
+
+TEST(DistanceConstraint, HandCheckedStretchedPair) {
+  // Length 3 along x, rest 1, w = (1, 3): C = 2, s = 2 / 4, Δp0 = -0.5·1·(1,0,0),
+  // Δp1 = -0.5·3·(-1,0,0).
+  const Points x = {Vector3r(3, 0, 0), Vector3r(0, 0, 0)};
+  const Projection r = project(x, {1, 3}, 1, 1);
+  ASSERT_TRUE(r.ok);
+  EXPECT_TRUE(near_relative(r.corr[0], Vector3r(-0.5, 0, 0)));
+  EXPECT_TRUE(near_relative(r.corr[1], Vector3r(1.5, 0, 0)));
+  // Half stiffness halves the correction.
+  const Projection half = project(x, {1, 3}, 1, Real(0.5));
+  EXPECT_TRUE(near_relative(half.corr[0], Vector3r(-0.25, 0, 0)));
+  EXPECT_TRUE(near_relative(half.corr[1], Vector3r(0.75, 0, 0)));
+}
+
+TEST(DistanceConstraint, CompressedPairIsPushedApart) {
+  const Points x = {Vector3r(0, 0, 0), Vector3r(0, 0.5, 0)};
+  const Projection r = project(x, {1, 1}, 2, 1);
+  ASSERT_TRUE(r.ok);
+  EXPECT_TRUE(near_relative(r.corr[0], Vector3r(0, -0.75, 0)));
+  EXPECT_TRUE(near_relative(r.corr[1], Vector3r(0, 0.75, 0)));
+}
+
+TEST(DistanceConstraint, SatisfiedConstraintGivesZeroCorrectionAndTrue) {
+  const Points x = {Vector3r(1, 2, 3), Vector3r(1, 2, 5)};
+  const Projection r = project(x, {1, 1}, 2, 1);
+  EXPECT_TRUE(r.ok);
+  EXPECT_LE(max_norm(r.corr), kRoundOff);
+}
+
+TEST(DistanceConstraint, InvariantsOnRandomInput) {
+  Random random(101);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Points x = {random.vector(), random.vector()};
+    const Masses w = {random.inverse_mass(), random.inverse_mass()};
+    const Real rest = random.uniform(Real(0.1), Real(2));
+    const Real stiffness = random.uniform(Real(0.2), Real(1));
+    const Projection r = project(x, w, rest, stiffness);
+    ASSERT_TRUE(r.ok);
+    ASSERT_TRUE(all_finite(r.corr));
+    EXPECT_TRUE(conserves_linear_momentum(r.corr, w));
+    EXPECT_TRUE(conserves_angular_momentum(x, r.corr, w));
+
+    // Along -w∇C with the finite-difference gradient, scaled by k C / Σ w |∇C|².
+    const auto grad = numeric_gradient<2>([&](const Points& y) { return distance_constraint(y, rest); }, x);
+    Real fitted = 0;
+    EXPECT_TRUE(along_weighted_gradient(r.corr, w, grad, kFiniteDifferenceTolerance, &fitted));
+    const Real C = distance_constraint(x, rest);
+    EXPECT_NEAR(fitted, stiffness * C / (w[0] + w[1]),
+                kFiniteDifferenceTolerance * std::abs(C / (w[0] + w[1])) + kRoundOff);
+
+    // Rigid motion: the same C, corrections rotated.
+    const Matrix3r R = random.rotation();
+    const Vector3r t = random.vector(-5, 5);
+    const Points y = transformed(x, R, t);
+    EXPECT_NEAR(distance_constraint(y, rest), distance_constraint(x, rest), 10 * kRoundOff);
+    const Projection moved = project(y, w, rest, stiffness);
+    ASSERT_TRUE(moved.ok);
+    for (int i = 0; i < 2; ++i)
+      EXPECT_TRUE(near_relative(moved.corr[i], R * r.corr[i], 10 * kRoundOff));
+  }
+}
+
+TEST(DistanceConstraint, StaticParticleIsNeverMoved) {
+  Random random(102);
+  for (int trial = 0; trial < 10; ++trial) {
+    const Points x = {random.vector(), random.vector()};
+    const Projection r = project(x, {0, random.inverse_mass()}, Real(0.3), 1);
+    ASSERT_TRUE(r.ok);
+    EXPECT_EQ(r.corr[0], Vector3r::Zero());
+    // The movable particle alone satisfies the constraint in one step.
+    EXPECT_NEAR(distance_constraint(applied(x, r.corr), Real(0.3)), 0, 10 * kRoundOff);
+  }
+}
+
+TEST(DistanceConstraint, StiffnessOneSatisfiesTheConstraintInOneStep) {
+  Random random(103);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Points x = {random.vector(), random.vector()};
+    const Masses w = {random.inverse_mass(), random.inverse_mass()};
+    const Real rest = random.uniform(Real(0), Real(2));
+    const Projection r = project(x, w, rest, 1);
+    ASSERT_TRUE(r.ok);
+    EXPECT_NEAR(distance_constraint(applied(x, r.corr), rest), 0, 10 * kRoundOff);
+  }
+}
+
+TEST(DistanceConstraint, DegenerateInputGivesFalseAndZeroCorrection) {
+  Points corr;
+  const Vector3r p(0.3, -0.2, 0.7);
+  // Coincident points (with and without a rest length).
+  for (const Real rest : {Real(0), Real(1)}) {
+    corr = {Vector3r::Constant(7), Vector3r::Constant(7)};
+    EXPECT_FALSE(PositionBasedDynamics::solve_DistanceConstraint(p, 1, p, 1, rest, 1, corr[0],
+                                                                 corr[1]));
+    EXPECT_EQ(corr[0], Vector3r::Zero());
+    EXPECT_EQ(corr[1], Vector3r::Zero());
+  }
+  // Every particle static.
+  corr = {Vector3r::Constant(7), Vector3r::Constant(7)};
+  EXPECT_FALSE(PositionBasedDynamics::solve_DistanceConstraint(p, 0, Vector3r(1, 2, 3), 0, 1, 1,
+                                                               corr[0], corr[1]));
+  EXPECT_EQ(corr[0], Vector3r::Zero());
+  EXPECT_EQ(corr[1], Vector3r::Zero());
+  // Zero rest length with distinct points is an ordinary constraint: it pulls them together.
+  const Projection r = project({p, Vector3r(1, 1, 1)}, {1, 1}, 0, 1);
+  ASSERT_TRUE(r.ok);
+  EXPECT_TRUE(near_relative(p + r.corr[0], Vector3r(1, 1, 1) + r.corr[1]));
+}
+
+TEST(XPBDDistanceConstraint, ZeroComplianceEqualsPBDWithStiffnessOne) {
+  Random random(104);
+  for (int trial = 0; trial < 10; ++trial) {
+    const Points x = {random.vector(), random.vector()};
+    const Masses w = {random.inverse_mass(), random.inverse_mass()};
+    const Real rest = random.uniform(Real(0.1), Real(2));
+    Real lambda = 0;
+    const Projection xpbd = project_xpbd(x, w, rest, 0, Real(0.01), lambda);
+    const Projection pbd = project(x, w, rest, 1);
+    ASSERT_TRUE(xpbd.ok);
+    for (int i = 0; i < 2; ++i) EXPECT_TRUE(near_relative(xpbd.corr[i], pbd.corr[i]));
+    // λ = -C / Σ w |∇C|².
+    EXPECT_NEAR(lambda, -distance_constraint(x, rest) / (w[0] + w[1]), 10 * kRoundOff);
+  }
+}
+
+TEST(XPBDDistanceConstraint, FirstIterationHandChecked) {
+  // C = 2, w = (1, 1), α = 0.02, dt = 0.1: α̃ = 2, Δλ = -2 / (2 + 2) = -0.5, Δp0 = -0.5 (1,0,0).
+  const Points x = {Vector3r(3, 0, 0), Vector3r(0, 0, 0)};
+  Real lambda = 0;
+  const Projection r = project_xpbd(x, {1, 1}, 1, Real(0.02), Real(0.1), lambda);
+  ASSERT_TRUE(r.ok);
+  EXPECT_NEAR(lambda, -0.5, kRoundOff);
+  EXPECT_TRUE(near_relative(r.corr[0], Vector3r(-0.5, 0, 0)));
+  EXPECT_TRUE(near_relative(r.corr[1], Vector3r(0.5, 0, 0)));
+}
+
+TEST(XPBDDistanceConstraint, MultiplierConvergesToComplianceBalance) {
+  Random random(105);
+  for (int trial = 0; trial < 5; ++trial) {
+    Points x = {random.vector(), random.vector()};
+    const Masses w = {random.inverse_mass(), random.inverse_mass()};
+    const Real rest = random.uniform(Real(0.1), Real(0.5));
+    const Real compliance = random.uniform(Real(1e-4), Real(1e-2));
+    const Real dt = Real(1) / 60;
+    const Real alpha_tilde = compliance / (dt * dt);
+    Real lambda = 0;
+    for (int iteration = 0; iteration < 50; ++iteration) {
+      const Projection r = project_xpbd(x, w, rest, compliance, dt, lambda);
+      ASSERT_TRUE(r.ok);
+      x = applied(x, r.corr);
+    }
+    const Real C = distance_constraint(x, rest);
+    EXPECT_NEAR(C + alpha_tilde * lambda, 0, 10 * kRoundOff * (1 + alpha_tilde * std::abs(lambda)));
+    // The soft constraint settles between the initial state and the rest length.
+    EXPECT_GT(std::abs(lambda), 0);
+  }
+}
+
+TEST(XPBDDistanceConstraint, InvalidTimeStepOrComplianceReturnsFalseAndKeepsLambda) {
+  const Points x = {Vector3r(3, 0, 0), Vector3r(0, 0, 0)};
+  for (const auto& [compliance, dt] : {std::pair<Real, Real>{Real(0.01), Real(0)},
+                                       {Real(0.01), Real(-0.1)},
+                                       {Real(-1e-3), Real(0.1)}}) {
+    Real lambda = Real(0.25);
+    const Projection r = project_xpbd(x, {1, 1}, 1, compliance, dt, lambda);
+    EXPECT_FALSE(r.ok);
+    EXPECT_EQ(lambda, Real(0.25));
+    EXPECT_EQ(max_norm(r.corr), 0);
+  }
+  // Degenerate input too.
+  Real lambda = Real(0.25);
+  const Projection r = project_xpbd({x[0], x[0]}, {1, 1}, 1, Real(0.01), Real(0.1), lambda);
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(lambda, Real(0.25));
+  EXPECT_EQ(max_norm(r.corr), 0);
+}
+
+TEST(XPBDDistanceConstraint, StaticParticleIsNeverMoved) {
+  const Points x = {Vector3r(0, 0, 0), Vector3r(0, 2, 0)};
+  Real lambda = 0;
+  const Projection r = project_xpbd(x, {2, 0}, 1, Real(1e-3), Real(0.01), lambda);
+  ASSERT_TRUE(r.ok);
+  EXPECT_EQ(r.corr[1], Vector3r::Zero());
+  EXPECT_GT(r.corr[0].y(), 0);
+}
+
+}  // namespace
+}  // namespace tessera::test

@@ -14,6 +14,8 @@
 // with a non-zero rest angle buckles deterministically towards positive ψ.
 #include <cmath>
 
+#include <Eigen/Geometry>
+
 #include <tessera/core/position_based_dynamics.hpp>
 #include <tessera/core/xpbd.hpp>
 

@@ -13,6 +13,8 @@
 // C = 0 exactly when the stencil is flat.
 #include <array>
 
+#include <Eigen/Geometry>
+
 #include <tessera/core/position_based_dynamics.hpp>
 #include <tessera/core/xpbd.hpp>
 

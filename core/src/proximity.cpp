@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <array>
 
+#include <Eigen/Geometry>
+
 #include <tessera/core/position_based_dynamics.hpp>
 
 #include "projection.hpp"

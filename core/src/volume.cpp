@@ -2,6 +2,8 @@
 // V = (1/6) ((p1 - p0) × (p2 - p0)) · (p3 - p0): the one formula of the family and its PBD and
 // XPBD projections. Keeps soft bodies from collapsing; the sign lets it also un-invert a
 // tetrahedron.
+#include <Eigen/Geometry>
+
 #include <tessera/core/position_based_dynamics.hpp>
 #include <tessera/core/xpbd.hpp>
 

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products and rotations on Vector3r, for every user
 #include <limits>
 #include <type_traits>
 

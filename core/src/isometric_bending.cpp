@@ -50,16 +50,21 @@ bool build_bending_matrix(const Vector3r& p0, const Vector3r& p1, const Vector3r
   return true;
 }
 
-/// C = ½ Σ_ij Q_ij p_i · p_j and ∇_{pi} C = Σ_j Q_ij p_j. Returns false when the gradient
+/// C = ½ Σ_ij Q_ij p_i · p_j and ∇_{pi} C = Σ_j Q_ij p_j. The rows of Q sum to zero, so the
+/// positions are taken relative to their centroid first: the same values, without the
+/// cancellation that far-from-origin coordinates would cause. Returns false when the gradient
 /// vanishes (a flat stencil: the constraint is satisfied and there is no direction to move).
 bool evaluate_bending(const std::array<const Vector3r*, 4>& p, const Matrix4r& Q, Real& C,
                       detail::Gradients<4>& grad) {
+  const Vector3r centroid = Real(0.25) * (*p[0] + *p[1] + *p[2] + *p[3]);
+  std::array<Vector3r, 4> relative;
+  for (int i = 0; i < 4; ++i) relative[i] = *p[i] - centroid;
   Real gradient_norm_squared = 0;
   C = 0;
   for (int i = 0; i < 4; ++i) {
     grad[i].setZero();
-    for (int j = 0; j < 4; ++j) grad[i] += Q(i, j) * *p[j];
-    C += p[i]->dot(grad[i]);
+    for (int j = 0; j < 4; ++j) grad[i] += Q(i, j) * relative[j];
+    C += relative[i].dot(grad[i]);
     gradient_norm_squared += grad[i].squaredNorm();
   }
   C *= Real(0.5);

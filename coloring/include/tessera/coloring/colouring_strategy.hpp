@@ -1,0 +1,78 @@
+// Colouring strategies behind one interface, and a registry that finds them by name, so a
+// tool can list and compare them and users can plug in their own.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <tessera/coloring/colouring.hpp>
+#include <tessera/coloring/constraint_graph.hpp>
+
+namespace tessera {
+
+/// Knobs shared by the strategies; each strategy reads the ones it documents.
+struct ColouringOptions {
+  /// Seed of the randomised strategies (random priorities, METIS). Same seed, same colouring,
+  /// for any thread count.
+  std::uint64_t seed = 1;
+  /// metis: movable particles per part; 0 picks it from the L2 cache size (see metis_strategy).
+  std::size_t particles_per_part = 0;
+  /// Rounds of iterated greedy (Culberson) in the reduction pass; each round recolours the
+  /// constraints first-fit, colour class by colour class, which never adds a colour.
+  std::size_t reduction_rounds = 24;
+  /// Post-passes applied by run_colouring after any strategy, reduction first.
+  bool reduce = false;
+  bool balance = false;
+};
+
+/// A way of colouring a constraint graph. Implementations must be deterministic: the same
+/// graph and options give the same colouring on every run and for any number of TBB threads.
+/// Parallel strategies run in the caller's TBB arena.
+class ColouringStrategy {
+ public:
+  virtual ~ColouringStrategy() = default;
+  /// Short unique name used by the registry and the tool ("greedy", "dsatur", ...).
+  virtual std::string_view name() const = 0;
+  /// One line saying what the strategy does, for listings.
+  virtual std::string_view description() const = 0;
+  /// Colours every constraint of the graph so that constraints sharing a movable particle
+  /// get different colours.
+  virtual Colouring colour(const ConstraintGraph& graph, const ColouringOptions& options) const = 0;
+};
+
+/// Strategies by name, in the order they were added.
+class ColouringRegistry {
+ public:
+  /// An empty registry.
+  ColouringRegistry() = default;
+  /// A registry holding Tessera's built-in strategies: greedy, largest-first, smallest-last,
+  /// dsatur, iterated-greedy, random, metis.
+  static ColouringRegistry with_builtin_strategies();
+
+  /// Adds a strategy; throws tessera::InvalidInput if the name is empty or already taken.
+  void add(std::shared_ptr<const ColouringStrategy> strategy);
+  /// The strategy called `name`; throws tessera::InvalidInput listing the known names if
+  /// there is none.
+  const ColouringStrategy& get(std::string_view name) const;
+  bool contains(std::string_view name) const;
+  std::vector<std::string_view> names() const;
+  std::size_t size() const { return strategies_.size(); }
+
+ private:
+  std::vector<std::shared_ptr<const ColouringStrategy>> strategies_;
+};
+
+/// The built-in strategies, one factory each (the registry holds one of every kind).
+std::shared_ptr<const ColouringStrategy> make_greedy_strategy();
+std::shared_ptr<const ColouringStrategy> make_largest_first_strategy();
+std::shared_ptr<const ColouringStrategy> make_smallest_last_strategy();
+std::shared_ptr<const ColouringStrategy> make_dsatur_strategy();
+std::shared_ptr<const ColouringStrategy> make_iterated_greedy_strategy();
+std::shared_ptr<const ColouringStrategy> make_random_strategy();
+std::shared_ptr<const ColouringStrategy> make_metis_strategy();
+
+}  // namespace tessera

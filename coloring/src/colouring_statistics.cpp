@@ -1,0 +1,117 @@
+// Statistics and validation. validate() stamps each movable particle with the colour that
+// last used it while walking the colours one after another, so a second use within one colour
+// is seen in O(1): one pass over the incidences.
+#include <tessera/coloring/colouring_statistics.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <limits>
+#include <sstream>
+
+#include <tessera/coloring/refinement.hpp>
+
+namespace tessera {
+
+ColouringValidation validate(const ConstraintGraph& graph, const Colouring& colouring) {
+  auto fail = [](std::string problem) { return ColouringValidation{false, std::move(problem)}; };
+  const std::size_t count = graph.constraint_count();
+  if (colouring.constraint_count() != count)
+    return fail("colouring has " + std::to_string(colouring.constraint_count()) +
+                " constraints, the graph " + std::to_string(count));
+  const auto offsets = colouring.colour_offsets();
+  if (count > 0 && (offsets.empty() || offsets.back() != count))
+    return fail("colour lists hold " + std::to_string(offsets.empty() ? 0 : offsets.back()) +
+                " constraints, expected " + std::to_string(count));
+  if (colouring.renumbers_particles() && colouring.particle_new_to_old().size() != graph.particle_count())
+    return fail("particle permutation has " + std::to_string(colouring.particle_new_to_old().size()) +
+                " entries, the graph " + std::to_string(graph.particle_count()) + " particles");
+
+  std::vector<std::uint8_t> listed(count, 0);
+  constexpr std::uint32_t kUnused = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> used_by(graph.particle_count(), kUnused);  // last constraint
+  std::vector<Colour> used_in(graph.particle_count(), 0);
+  for (Colour k = 0; k < colouring.colour_count(); ++k) {
+    if (colouring.colour_size(k) == 0) return fail("colour " + std::to_string(k) + " is empty");
+    for (ConstraintIndex c : colouring.constraints_of(k)) {
+      if (c >= count) return fail("colour " + std::to_string(k) + " lists constraint " + std::to_string(c) + ", out of range");
+      if (listed[c]) return fail(graph.describe_constraint(c) + " is listed twice");
+      listed[c] = 1;
+      if (colouring.colour_of(c) != k)
+        return fail(graph.describe_constraint(c) + " is listed in colour " + std::to_string(k) +
+                    " but has colour " + std::to_string(colouring.colour_of(c)));
+      for (ParticleIndex p : graph.particles_of(c)) {
+        if (used_by[p] != kUnused && used_in[p] == k)
+          return fail("colour " + std::to_string(k) + ": " + graph.describe_constraint(used_by[p]) +
+                      " and " + graph.describe_constraint(c) + " share movable particle " +
+                      std::to_string(p));
+        used_by[p] = c;
+        used_in[p] = k;
+      }
+    }
+  }
+  return {};
+}
+
+ColouringStatistics compute_statistics(const ConstraintGraph& graph, const Colouring& colouring,
+                                       std::string strategy, double seconds) {
+  ColouringStatistics s;
+  s.strategy = std::move(strategy);
+  s.constraints = colouring.constraint_count();
+  s.colours = colouring.colour_count();
+  s.sizes.resize(s.colours);
+  for (Colour k = 0; k < s.colours; ++k) s.sizes[k] = colouring.colour_size(k);
+  if (!s.sizes.empty()) {
+    s.largest = *std::max_element(s.sizes.begin(), s.sizes.end());
+    s.smallest = *std::min_element(s.sizes.begin(), s.sizes.end());
+    s.mean = double(s.constraints) / double(s.colours);
+    s.balance = double(s.largest) / s.mean;
+    s.size_ratio = double(s.largest) / double(s.smallest);
+  }
+  s.lower_bound = graph.colour_lower_bound();
+  s.colours_per_lower_bound = s.lower_bound > 0 ? double(s.colours) / double(s.lower_bound) : 0;
+  s.seconds = seconds;
+  const ColouringValidation check = validate(graph, colouring);
+  s.valid = check.valid;
+  s.problem = check.problem;
+  return s;
+}
+
+std::string format_statistics(const ColouringStatistics& s) {
+  std::ostringstream out;
+  out << "strategy: " << s.strategy << "\n"
+      << "constraints: " << s.constraints << "\n"
+      << "colours: " << s.colours << "\n"
+      << "sizes:";
+  for (std::size_t size : s.sizes) out << ' ' << size;
+  out << "\n"
+      << "largest: " << s.largest << "\n"
+      << "smallest: " << s.smallest << "\n"
+      << "mean: " << s.mean << "\n"
+      << "balance: " << s.balance << "\n"
+      << "largest/smallest: " << s.size_ratio << "\n"
+      << "lower_bound: " << s.lower_bound << "\n"
+      << "colours/lower_bound: " << s.colours_per_lower_bound << "\n"
+      << "seconds: " << s.seconds << "\n"
+      << "valid: " << (s.valid ? "yes" : "no: " + s.problem) << "\n";
+  return out.str();
+}
+
+ColouringRun run_colouring(const ColouringStrategy& strategy, const ConstraintGraph& graph,
+                           const ColouringOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  Colouring colouring = strategy.colour(graph, options);
+  std::string name(strategy.name());
+  if (options.reduce) {
+    colouring = reduce_colours(graph, colouring, options);
+    name += "+reduce";
+  }
+  if (options.balance) {
+    colouring = balance_colours(graph, colouring);
+    name += "+balance";
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ColouringStatistics statistics = compute_statistics(graph, colouring, std::move(name), seconds);
+  return {std::move(colouring), std::move(statistics)};
+}
+
+}  // namespace tessera

@@ -1,0 +1,136 @@
+// The metis strategy: partition particles into cache-sized parts, colour each part's
+// interior constraints in parallel with one shared palette, then the constraints that cross
+// parts, and renumber particles part by part.
+//
+// Why it is race-free: a part's interior constraints touch only that part's particles, so the
+// per-particle colour sets written by one part's worker are never read or written by another;
+// each part colours first-fit in the global smallest-last order restricted to the part, so its
+// colours depend on the part alone. Crossing constraints are coloured afterwards, sequentially,
+// first-fit in the same order. Hence the colouring is a function of (graph, seed, part size),
+// independent of the thread count.
+//
+// Layout: new particle ids run part by part (movable particles in their original order within
+// a part, static particles last), and each colour lists its interior constraints part by part,
+// then its crossing constraints, so a worker's contiguous slice of a colour gathers from a
+// compact range of the renumbered particle arrays.
+#include <algorithm>
+#include <numeric>
+
+#include <tbb/parallel_for.h>
+
+#include <tessera/coloring/colouring_strategy.hpp>
+#include <tessera/coloring/particle_partition.hpp>
+
+#include "colour_masks.hpp"
+
+namespace tessera {
+namespace {
+
+class MetisStrategy final : public ColouringStrategy {
+ public:
+  std::string_view name() const override { return "metis"; }
+  std::string_view description() const override {
+    return "METIS parts sized to L2, coloured per part in parallel, then crossing constraints; "
+           "particles renumbered by part";
+  }
+
+  Colouring colour(const ConstraintGraph& graph, const ColouringOptions& options) const override {
+    const std::size_t count = graph.constraint_count();
+    const std::size_t per_part = options.particles_per_part != 0
+                                     ? options.particles_per_part
+                                     : cache_sized_particles_per_part(graph);
+    const std::size_t movable = graph.movable_particle_count();
+    const ParticlePartition partition =
+        partition_particles(graph, (movable + per_part - 1) / std::max<std::size_t>(per_part, 1), options.seed);
+    const std::size_t parts = partition.part_count;
+
+    // Part of each constraint: its particles' common part, or `parts` (crossing, or touching
+    // no movable particle).
+    const std::uint32_t crossing = static_cast<std::uint32_t>(parts);
+    std::vector<std::uint32_t> part_of_constraint(count, crossing);
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t c) {
+      const auto particles = graph.particles_of(static_cast<ConstraintIndex>(c));
+      if (particles.empty()) return;
+      const std::uint32_t first = partition.part_of_particle[particles[0]];
+      for (ParticleIndex p : particles)
+        if (partition.part_of_particle[p] != first) return;
+      part_of_constraint[c] = first;
+    });
+
+    // Constraints grouped by part (crossing last), each group in smallest-last order.
+    const std::vector<ConstraintIndex> order = detail::smallest_last_order(graph);
+    std::vector<std::uint32_t> group_start(parts + 2, 0);
+    for (std::uint32_t part : part_of_constraint) ++group_start[part + 1];
+    std::partial_sum(group_start.begin(), group_start.end(), group_start.begin());
+    std::vector<ConstraintIndex> grouped(count);
+    {
+      std::vector<std::uint32_t> cursor(group_start.begin(), group_start.end() - 1);
+      for (ConstraintIndex c : order) grouped[cursor[part_of_constraint[c]]++] = c;
+    }
+
+    std::vector<Colour> colours(count, 0);
+    detail::ParticleColourMasks masks(graph.particle_count(),
+                                      std::max<std::size_t>(graph.colour_lower_bound(), 64));
+    // Per part, in parallel. The shared sets cannot grow while workers use them, so a part that
+    // would need more colours than their capacity undoes its own particles' colours and stops.
+    std::vector<std::uint8_t> overflow(parts, 0);
+    tbb::parallel_for(std::size_t(0), parts, [&](std::size_t part) {
+      const std::span<const ConstraintIndex> members(grouped.data() + group_start[part],
+                                                     grouped.data() + group_start[part + 1]);
+      for (std::size_t i = 0; i < members.size(); ++i) {
+        const auto particles = graph.particles_of(members[i]);
+        const Colour k = masks.first_free(particles);
+        if (k >= masks.capacity()) {
+          for (std::size_t j = 0; j < i; ++j) masks.release(graph.particles_of(members[j]), colours[members[j]]);
+          overflow[part] = 1;
+          return;
+        }
+        masks.take(particles, k);
+        colours[members[i]] = k;
+      }
+    });
+    // Parts that ran out of capacity were undone; redo them after the sets grow (sequential
+    // first-fit grows as needed and makes the same choices).
+    for (std::size_t part = 0; part < parts; ++part) {
+      if (!overflow[part]) continue;
+      const std::span<const ConstraintIndex> members(grouped.data() + group_start[part],
+                                                     grouped.data() + group_start[part + 1]);
+      detail::first_fit_in_order(graph, members, masks, colours);
+    }
+    // Crossing constraints, sequentially.
+    const std::span<const ConstraintIndex> crossing_members(grouped.data() + group_start[parts],
+                                                            grouped.data() + group_start[parts + 1]);
+    detail::first_fit_in_order(graph, crossing_members, masks, colours);
+
+    // Schedule order: by part, then by id (parts listed in their new particle order).
+    std::vector<ConstraintIndex> schedule(count);
+    {
+      std::vector<std::uint32_t> cursor(group_start.begin(), group_start.end() - 1);
+      for (std::size_t c = 0; c < count; ++c)
+        schedule[cursor[part_of_constraint[c]]++] = static_cast<ConstraintIndex>(c);
+    }
+    Colouring colouring = Colouring::from_colours(std::move(colours), schedule);
+
+    // Particles part by part, static ones last.
+    std::vector<std::uint32_t> particle_start(parts + 2, 0);
+    for (std::uint32_t part : partition.part_of_particle)
+      ++particle_start[(part == ParticlePartition::kNoPart ? parts : part) + 1];
+    std::partial_sum(particle_start.begin(), particle_start.end(), particle_start.begin());
+    std::vector<ParticleIndex> new_to_old(graph.particle_count());
+    for (std::size_t p = 0; p < graph.particle_count(); ++p) {
+      const std::uint32_t part = partition.part_of_particle[p];
+      new_to_old[particle_start[part == ParticlePartition::kNoPart ? parts : part]++] =
+          static_cast<ParticleIndex>(p);
+    }
+    colouring.set_particle_order(std::move(new_to_old));
+    return colouring;
+  }
+};
+
+}  // namespace
+
+std::shared_ptr<const ColouringStrategy> make_metis_strategy() {
+  return std::make_shared<MetisStrategy>();
+}
+
+}  // namespace tessera

@@ -1,0 +1,132 @@
+// METIS k-way partitioning of the particle graph.
+//
+// The particle graph is built in METIS's CSR form (xadj/adjncy over the movable particles,
+// renumbered densely): two passes over particles, each collecting the neighbours through the
+// particle's constraints, sorting and deduplicating them in a per-thread scratch vector. The
+// first pass counts, the second fills, so the arrays do not depend on the thread count.
+// METIS itself runs sequentially with a fixed seed, so the partition is repeatable.
+//
+// Debian's METIS 5.1.0 divides by zero for one part and misbehaves on tiny inputs, so
+// those cases never reach it: they become contiguous blocks of the movable particles.
+#include <tessera/coloring/particle_partition.hpp>
+
+#include <algorithm>
+#include <limits>
+#include <new>
+#include <string>
+
+#include <metis.h>
+#include <unistd.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <tessera/core/error.hpp>
+
+namespace tessera {
+namespace {
+
+void contiguous_blocks(ParticlePartition& partition, const std::vector<ParticleIndex>& movable,
+                       std::size_t part_count) {
+  partition.part_count = part_count;
+  for (std::size_t i = 0; i < movable.size(); ++i)
+    partition.part_of_particle[movable[i]] = static_cast<std::uint32_t>(i * part_count / movable.size());
+}
+
+}  // namespace
+
+std::size_t cache_sized_particles_per_part(const ConstraintGraph& graph, std::size_t cache_bytes) {
+  if (cache_bytes == 0) {
+    const long l2 = sysconf(_SC_LEVEL2_CACHE_SIZE);
+    cache_bytes = l2 > 0 ? static_cast<std::size_t>(l2) : std::size_t(1) << 20;
+  }
+  const std::size_t movable = std::max<std::size_t>(graph.movable_particle_count(), 1);
+  const std::size_t incidences_per_particle = (graph.incidence_count() + movable - 1) / movable;
+  const std::size_t bytes_per_particle = 8 * sizeof(Real) + 8 * incidences_per_particle;
+  return std::max<std::size_t>(cache_bytes / bytes_per_particle, 64);
+}
+
+ParticlePartition partition_particles(const ConstraintGraph& graph, std::size_t part_count,
+                                      std::uint64_t seed) {
+  ParticlePartition partition;
+  partition.part_of_particle.assign(graph.particle_count(), ParticlePartition::kNoPart);
+  std::vector<ParticleIndex> movable;
+  movable.reserve(graph.movable_particle_count());
+  std::vector<idx_t> local(graph.particle_count(), -1);
+  for (std::size_t p = 0; p < graph.particle_count(); ++p) {
+    if (!graph.is_movable(static_cast<ParticleIndex>(p))) continue;
+    local[p] = static_cast<idx_t>(movable.size());
+    movable.push_back(static_cast<ParticleIndex>(p));
+  }
+  if (movable.empty()) return partition;
+  part_count = std::clamp<std::size_t>(part_count, 1, movable.size());
+  // METIS needs a few vertices per part to do anything useful (and 5.1 fails on one part).
+  if (part_count == 1 || movable.size() < 8 * part_count) {
+    contiguous_blocks(partition, movable, std::max<std::size_t>(1, std::min(part_count, movable.size() / 8)));
+    return partition;
+  }
+
+  const std::size_t n = movable.size();
+  std::vector<idx_t> xadj(n + 1, 0);
+  tbb::enumerable_thread_specific<std::vector<idx_t>> scratch;
+  auto neighbours = [&](std::size_t i, std::vector<idx_t>& out) {
+    out.clear();
+    const ParticleIndex p = movable[i];
+    for (ConstraintIndex c : graph.constraints_of(p))
+      for (ParticleIndex q : graph.particles_of(c))
+        if (q != p) out.push_back(local[q]);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
+    std::vector<idx_t>& out = scratch.local();
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      neighbours(i, out);
+      xadj[i + 1] = static_cast<idx_t>(out.size());
+    }
+  });
+  std::size_t edges = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    edges += static_cast<std::size_t>(xadj[i + 1]);
+    if (edges > static_cast<std::size_t>(std::numeric_limits<idx_t>::max()))
+      throw InvalidInput("partition_particles: the particle graph has more than " +
+                         std::to_string(std::numeric_limits<idx_t>::max()) +
+                         " adjacency entries, beyond this METIS build's 32-bit indices");
+    xadj[i + 1] += xadj[i];
+  }
+  if (edges == 0) {
+    contiguous_blocks(partition, movable, part_count);
+    return partition;
+  }
+  std::vector<idx_t> adjncy(edges);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
+    std::vector<idx_t>& out = scratch.local();
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      neighbours(i, out);
+      std::copy(out.begin(), out.end(), adjncy.begin() + xadj[i]);
+    }
+  });
+
+  idx_t options[METIS_NOPTIONS];
+  METIS_SetDefaultOptions(options);
+  options[METIS_OPTION_SEED] = static_cast<idx_t>(seed & 0x7FFFFFFF);
+  options[METIS_OPTION_NUMBERING] = 0;
+  idx_t vertex_count = static_cast<idx_t>(n), constraints_per_vertex = 1;
+  idx_t parts = static_cast<idx_t>(part_count), edge_cut = 0;
+  std::vector<idx_t> part(n, 0);
+  const int status = METIS_PartGraphKway(&vertex_count, &constraints_per_vertex, xadj.data(),
+                                         adjncy.data(), nullptr, nullptr, nullptr, &parts, nullptr,
+                                         nullptr, options, &edge_cut, part.data());
+  if (status == METIS_ERROR_MEMORY) throw std::bad_alloc();
+  if (status != METIS_OK)
+    throw InvalidInput("partition_particles: METIS_PartGraphKway failed (status " +
+                       std::to_string(status) + ") for " + std::to_string(n) + " particles in " +
+                       std::to_string(part_count) + " parts");
+  partition.part_count = part_count;
+  for (std::size_t i = 0; i < n; ++i)
+    partition.part_of_particle[movable[i]] = static_cast<std::uint32_t>(part[i]);
+  return partition;
+}
+
+}  // namespace tessera

@@ -1,0 +1,92 @@
+// Colouring (CSR by colour, particle permutation), validate() and the statistics.
+#include <gtest/gtest.h>
+
+#include <tessera/coloring/colouring.hpp>
+#include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/core/error.hpp>
+
+#include "test_meshes.hpp"
+
+namespace tessera {
+namespace {
+
+TEST(Colouring, GroupsConstraintsByColourInIdOrderOrAGivenOrder) {
+  const Colouring c = Colouring::from_colours({1, 0, 1, 2, 0});
+  ASSERT_EQ(c.colour_count(), 3u);
+  EXPECT_EQ(std::vector<ConstraintIndex>(c.constraints_of(0).begin(), c.constraints_of(0).end()),
+            (std::vector<ConstraintIndex>{1, 4}));
+  EXPECT_EQ(std::vector<ConstraintIndex>(c.constraints_of(1).begin(), c.constraints_of(1).end()),
+            (std::vector<ConstraintIndex>{0, 2}));
+  EXPECT_EQ(c.colour_size(2), 1u);
+  const std::vector<ConstraintIndex> order = {4, 3, 2, 1, 0};
+  const Colouring r = Colouring::from_colours({1, 0, 1, 2, 0}, order);
+  EXPECT_EQ(std::vector<ConstraintIndex>(r.constraints_of(0).begin(), r.constraints_of(0).end()),
+            (std::vector<ConstraintIndex>{4, 1}));
+  EXPECT_THROW(Colouring::from_colours({0, 2}), InvalidInput);  // colour 1 unused
+  const std::vector<ConstraintIndex> not_a_permutation = {0, 0, 1, 2, 3};
+  EXPECT_THROW(Colouring::from_colours({1, 0, 1, 2, 0}, not_a_permutation), InvalidInput);
+}
+
+TEST(Colouring, ParticlePermutationBothWays) {
+  Colouring c = Colouring::from_colours({0});
+  EXPECT_FALSE(c.renumbers_particles());
+  c.set_particle_order({2, 0, 1});
+  EXPECT_TRUE(c.renumbers_particles());
+  EXPECT_EQ(c.particle_old_to_new()[2], 0u);
+  EXPECT_EQ(c.particle_old_to_new()[0], 1u);
+  EXPECT_THROW(c.set_particle_order({0, 0, 1}), InvalidInput);
+  EXPECT_THROW(c.set_particle_order({0, 3, 1}), InvalidInput);
+}
+
+TEST(Validate, FindsTwoConstraintsOfOneColourSharingAMovableParticle) {
+  const ConstraintGraph graph = test::cloth_graph(3, 3, false);  // 16 edges
+  std::vector<Colour> all_distinct(graph.constraint_count());
+  for (std::size_t c = 0; c < all_distinct.size(); ++c) all_distinct[c] = static_cast<Colour>(c);
+  EXPECT_TRUE(validate(graph, Colouring::from_colours(all_distinct)).valid);
+
+  // Edges 0 (0-1) and 1 (0-3) share particle 0.
+  std::vector<Colour> clash = all_distinct;
+  clash[1] = 0;
+  for (std::size_t c = 2; c < clash.size(); ++c) clash[c] = static_cast<Colour>(c - 1);
+  const ColouringValidation check = validate(graph, Colouring::from_colours(clash));
+  EXPECT_FALSE(check.valid);
+  EXPECT_NE(check.problem.find("share movable particle 0"), std::string::npos) << check.problem;
+  EXPECT_NE(check.problem.find("constraint group 'distance', constraint 1"), std::string::npos);
+
+  EXPECT_FALSE(validate(graph, Colouring::from_colours({0, 1})).valid);  // wrong size
+}
+
+TEST(Validate, SharingAStaticParticleIsNoConflict) {
+  const ConstraintGraph graph = test::pinned_star_graph(5);
+  EXPECT_TRUE(validate(graph, Colouring::from_colours({0, 0, 0, 0, 0})).valid);
+}
+
+TEST(Statistics, SizesBalanceAndLowerBound) {
+  const ConstraintGraph graph = test::cloth_graph(3, 3, false);  // 16 edges, lower bound 6
+  std::vector<Colour> colours(16);
+  for (std::size_t c = 0; c < 16; ++c) colours[c] = static_cast<Colour>(c < 10 ? c % 8 : c - 8);
+  // Colours 0..7: sizes 0,1 → 2 each; 2..7 → 2 (c and c+8 for c<2... ) computed below.
+  const Colouring colouring = Colouring::from_colours(colours);
+  const ColouringStatistics s = compute_statistics(graph, colouring, "hand made", 0.5);
+  EXPECT_EQ(s.strategy, "hand made");
+  EXPECT_EQ(s.constraints, 16u);
+  EXPECT_EQ(s.colours, colouring.colour_count());
+  std::size_t total = 0;
+  for (std::size_t size : s.sizes) total += size;
+  EXPECT_EQ(total, 16u);
+  EXPECT_EQ(s.largest, *std::max_element(s.sizes.begin(), s.sizes.end()));
+  EXPECT_EQ(s.smallest, *std::min_element(s.sizes.begin(), s.sizes.end()));
+  EXPECT_DOUBLE_EQ(s.mean, 16.0 / s.colours);
+  EXPECT_DOUBLE_EQ(s.balance, s.largest / s.mean);
+  EXPECT_EQ(s.lower_bound, 6u);
+  EXPECT_DOUBLE_EQ(s.colours_per_lower_bound, s.colours / 6.0);
+  EXPECT_DOUBLE_EQ(s.seconds, 0.5);
+  EXPECT_EQ(s.valid, validate(graph, colouring).valid);
+  const std::string text = format_statistics(s);
+  for (const char* key : {"strategy: hand made", "colours: ", "sizes: ", "largest: ", "smallest: ",
+                          "balance: ", "lower_bound: 6", "colours/lower_bound: ", "seconds: ", "valid: "})
+    EXPECT_NE(text.find(key), std::string::npos) << key;
+}
+
+}  // namespace
+}  // namespace tessera

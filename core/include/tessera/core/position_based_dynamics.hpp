@@ -139,8 +139,12 @@ class PositionBasedDynamics {
   ///  * allowStretch = true: T = A_pq A_qq⁻¹ with A_qq = Σ m_i q_i q_iᵀ, the best-fitting
   ///    linear map, so an affine deformation is matched exactly.
   /// corr_i = k (T q_i + c - x_i) for movable particles, 0 for static ones; *rot (if not null)
-  /// receives T. Returns false (and zero corrections, *rot = identity) when A_pq, or A_qq
-  /// with allowStretch, is singular (e.g. every point on one line).
+  /// receives T. The mass-weighted corrections carry no linear and no angular momentum.
+  /// Returns false (and zero corrections, *rot = identity) for numPoints < 1, null arrays,
+  /// every particle static, or when T is undetermined: without allowStretch when A_pq has
+  /// rank < 2 (every current or rest point on one line; a planar cluster is fine), with
+  /// allowStretch when A_qq is singular (rest points coplanar). Rank is judged relative to
+  /// the largest singular value / eigenvalue.
   static bool solve_ShapeMatchingConstraint(const Vector3r x0[], const Vector3r x[],
                                             const Real invMasses[], const int numPoints,
                                             const Vector3r& restCm, const Real stiffness,
@@ -154,7 +158,8 @@ class PositionBasedDynamics {
   /// Strain based dynamics for a triangle (Müller et al. 2014, "Strain Based Dynamics").
   /// The rest triangle is taken in the xy plane (z is ignored):
   ///   D = [p1 - p0, p2 - p0] (2×2, x and y rows),   invRestMat = D⁻¹.
-  /// Returns false when the rest triangle has zero area in the xy plane.
+  /// Returns false (invRestMat = 0) when the rest triangle's area in the xy plane,
+  /// ½ |det D|, is at most kDegenerateTolerance.
   static bool init_StrainTriangleConstraint(const Vector3r& p0, const Vector3r& p1,
                                             const Vector3r& p2, Matrix2r& invRestMat);
 
@@ -164,6 +169,10 @@ class PositionBasedDynamics {
   ///   stretch i ∈ {x, y}: C = |f_i|² - 1, or |f_i| - 1 when normalizeStretch;
   ///   shear:              C = f_0 · f_1,   or f_0 · f_1 / (|f_0| |f_1|) when normalizeShear;
   /// with stiffness xxStiffness, yyStiffness, xyStiffness. corr_i is the sum of the three.
+  /// A sub-constraint with stiffness 0 is skipped. Returns false with every correction zero
+  /// when an active sub-constraint is degenerate (a normalized column of length ≤
+  /// kDegenerateTolerance, or a vanishing weighted gradient, e.g. the triangle collapsed to
+  /// a point or every particle static).
   static bool solve_StrainTriangleConstraint(const Vector3r& p0, Real invMass0,
                                              const Vector3r& p1, Real invMass1,
                                              const Vector3r& p2, Real invMass2,
@@ -173,8 +182,9 @@ class PositionBasedDynamics {
                                              const bool normalizeShear, Vector3r& corr0,
                                              Vector3r& corr1, Vector3r& corr2);
 
-  /// D = [p1 - p0, p2 - p0, p3 - p0],  invRestMat = D⁻¹. Returns false for a flat rest
-  /// tetrahedron (either orientation of a non-flat one is accepted).
+  /// D = [p1 - p0, p2 - p0, p3 - p0],  invRestMat = D⁻¹. Returns false (invRestMat = 0) for a
+  /// flat rest tetrahedron, |det D| / 6 ≤ kDegenerateTolerance (either orientation of a
+  /// non-flat one is accepted).
   static bool init_StrainTetraConstraint(const Vector3r& p0, const Vector3r& p1,
                                          const Vector3r& p2, const Vector3r& p3,
                                          Matrix3r& invRestMat);
@@ -182,7 +192,8 @@ class PositionBasedDynamics {
   /// F = [p1 - p0, p2 - p0, p3 - p0] · invRestMat, f_i its columns. Six sub-constraints in
   /// Gauss–Seidel order: stretch xx, yy, zz (C = |f_i|² - 1, or |f_i| - 1 normalized) with
   /// stretchStiffness[i], then shear xy, xz, yz (C = f_i · f_j, or normalized by |f_i||f_j|)
-  /// with shearStiffness[0], [1], [2].
+  /// with shearStiffness[0], [1], [2]. Zero stiffness and degenerate cases as for the
+  /// triangle.
   static bool solve_StrainTetraConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                           Real invMass1, const Vector3r& p2, Real invMass2,
                                           const Vector3r& p3, Real invMass3,
@@ -234,8 +245,8 @@ class PositionBasedDynamics {
   /// The rest triangle is mapped to its own plane by the orthonormal frame
   ///   a = (p1 - p0)/|p1 - p0|,  b = n̂ × a,  n = (p1 - p0) × (p2 - p0),
   /// D = [[a·(p1 - p0), a·(p2 - p0)], [b·(p1 - p0), b·(p2 - p0)]], invRestMat = D⁻¹ and
-  /// area = ½ |n|. The material x axis is the rest edge p0→p1. Returns false for a zero-area
-  /// rest triangle.
+  /// area = ½ |n|. The material x axis is the rest edge p0→p1. Returns false (area = 0,
+  /// invRestMat = 0) when the rest area is at most kDegenerateTolerance.
   static bool init_FEMTriangleConstraint(const Vector3r& p0, const Vector3r& p1,
                                          const Vector3r& p2, Real& area, Matrix2r& invRestMat);
 
@@ -247,8 +258,11 @@ class PositionBasedDynamics {
   /// C = energy = area · ½ (ε_xx S_xx + ε_yy S_yy + 2 ε_xy S_xy),
   /// ∇ from H = area · F S · invRestMatᵀ: ∇_{p1} = H col 0, ∇_{p2} = H col 1,
   /// ∇_{p0} = -(∇_{p1} + ∇_{p2}); projected as a PBD constraint with stiffness 1.
-  /// Returns false when the triangle is degenerate or the material is not positive definite
-  /// (ν_xy ν_yx ≥ 1 or a non-positive modulus).
+  /// At the rest shape (every |ε_ij| ≤ kDegenerateTolerance) the energy and its gradient
+  /// vanish: zero corrections, true. Returns false when the gradient is degenerate (e.g. the
+  /// triangle collapsed to a point, every particle static) or the material is not positive
+  /// definite (a non-positive E_x, E_y or G, ν_xy ν_yx ≥ 1, or a symmetrised 2×2 normal block
+  /// with non-positive determinant).
   static bool solve_FEMTriangleConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                           Real invMass1, const Vector3r& p2, Real invMass2,
                                           const Real& area, const Matrix2r& invRestMat,
@@ -258,7 +272,7 @@ class PositionBasedDynamics {
                                           Vector3r& corr0, Vector3r& corr1, Vector3r& corr2);
 
   /// D = [p1 - p0, p2 - p0, p3 - p0], invRestMat = D⁻¹, volume = |det D| / 6. Returns false
-  /// for a flat rest tetrahedron.
+  /// (volume = 0, invRestMat = 0) for a flat rest tetrahedron, volume ≤ kDegenerateTolerance.
   static bool init_FEMTetraConstraint(const Vector3r& p0, const Vector3r& p1,
                                       const Vector3r& p2, const Vector3r& p3, Real& volume,
                                       Matrix3r& invRestMat);
@@ -268,8 +282,10 @@ class PositionBasedDynamics {
   /// C = energy of computeGreenStrainAndPiolaStress (…Inversion when handleInversion is set
   /// and det F ≤ 0.2, i.e. the tetrahedron is inverted or nearly flat), ∇C from
   /// computeGradCGreen, projected as a PBD constraint with stiffness 1. Vertex order: p0 is
-  /// the reference vertex x1. Returns false for E ≤ 0, ν ∉ (-1, 0.5), or a degenerate
-  /// gradient.
+  /// the reference vertex x1. At the rest shape (every |ε_ij| ≤ kDegenerateTolerance) the
+  /// corrections are zero and true is returned. Returns false for E ≤ 0, ν ∉ (-1, 0.5), or a
+  /// degenerate gradient (e.g. collapsed to a point without handleInversion, every particle
+  /// static). E and restVolume scale C and ∇C alike, so they cancel in the PBD step.
   static bool solve_FEMTetraConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                        Real invMass1, const Vector3r& p2, Real invMass2,
                                        const Vector3r& p3, Real invMass3, const Real restVolume,
@@ -292,8 +308,10 @@ class PositionBasedDynamics {
   ///   constraintInfo.col(1) = u_t / |u_t| (zero when u_t vanishes),
   ///   (0,2) = 1 / (nᵀ K n) with K = (w0 + Σ b_i² w_i) I the inverse effective mass,
   ///   (1,2) = |u_t| / (tᵀ K t), the impulse that stops the tangential motion,
-  ///   (2,2) = u · n, the relative normal velocity at initialisation.
-  /// Returns false when both sides are static or normal is not a unit vector.
+  ///   (2,2) = u · n, the relative normal velocity at initialisation;
+  /// the remaining entries are 0.
+  /// Returns false (constraintInfo = 0) when both sides are static (w0 + Σ b_i² w_i ≤
+  /// kDegenerateTolerance) or normal is not a unit vector (| |n|² - 1 | > 1e-4).
   static bool init_ParticleTetContactConstraint(
       const Real invMass0, const Vector3r& x0, const Vector3r& v0, const Real invMass[],
       const Vector3r x[], const Vector3r v[], const Vector3r& bary, const Vector3r& normal,
@@ -303,7 +321,8 @@ class PositionBasedDynamics {
   ///   Δλ = -C / (nᵀ K n),   λ ← max(λ + Δλ, 0)  (applying only the clamped change),
   ///   corr0 = w0 Δλ n,  corr[i] = -w_i b_i Δλ n.
   /// lambda accumulates over the iterations of one step (start it at 0). A separated contact
-  /// (C > 0 and λ = 0) gives zero corrections and returns true.
+  /// (C > 0 and λ = 0) gives zero corrections and returns true. Returns false (zero
+  /// corrections, λ unchanged) when constraintInfo(0, 2) is not positive, i.e. init_ failed.
   static bool solve_ParticleTetContactConstraint(
       const Real invMass0, const Vector3r& x0, const Real invMass[], const Vector3r x[],
       const Vector3r& bary, Eigen::Matrix<Real, 3, 3, Eigen::DontAlign>& constraintInfo,
@@ -314,7 +333,9 @@ class PositionBasedDynamics {
   /// current tangential relative velocity (as in init_), the tangential impulse is
   ///   p = min(|u_t| / (tᵀ K t), frictionCoeff · lambda),  t = u_t / |u_t|,
   ///   corr_v0 = -w0 p t,  corr_v[i] = w_i b_i p t.
-  /// Returns false (zero corrections) when there is no tangential motion or no normal impulse.
+  /// Returns false (zero corrections) when there is no tangential motion (|u_t| ≤
+  /// kDegenerateTolerance), no normal impulse (frictionCoeff · lambda ≤ 0) or both sides are
+  /// static. constraintInfo is only read (its normal column).
   static bool velocitySolve_ParticleTetContactConstraint(
       const Real invMass0, const Vector3r& x0, const Vector3r& v0, const Real invMass[],
       const Vector3r x[], const Vector3r v[], const Vector3r& bary, const Real lambda,

@@ -60,7 +60,9 @@ class XPBD {
   ///   C = sqrt(2 V ψ₁(F)),   ∇C = V ∇ψ₁ / C,   α = compliance = 1 / E.
   /// handleInversion selects the inversion-robust material as in the PBD form. At the rest
   /// shape (C below the degenerate tolerance) the gradient is undefined: the corrections are
-  /// zero and true is returned. Returns false for ν ∉ (-1, 0.5).
+  /// zero and true is returned (λ unchanged). Returns false for ν ∉ (-1, 0.5) or
+  /// restVolume ≤ 0, besides the shared cases (dt ≤ 0, negative compliance, degenerate
+  /// gradient).
   static bool solve_FEMTetraConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                        Real invMass1, const Vector3r& p2, Real invMass2,
                                        const Vector3r& p3, Real invMass3, const Real restVolume,

@@ -9,6 +9,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <tessera/core/position_based_dynamics.hpp>

@@ -180,6 +180,7 @@ Colouring balance_colours(const ConstraintGraph& graph, const Colouring& colouri
   const std::size_t target = (colours.size() + count - 1) / count;  // ceil(mean)
 
   constexpr std::size_t kLongestChain = 48;
+  constexpr int kMaximumKempePasses = 4;
   std::vector<std::uint32_t> visited(colours.size(), 0);
   std::uint32_t stamp = 0;
   std::vector<ConstraintIndex> chain;
@@ -203,32 +204,40 @@ Colouring balance_colours(const ConstraintGraph& graph, const Colouring& colouri
   };
 
   const std::span<const ConstraintIndex> schedule_order = colouring.constraints_by_colour();
-  for (bool moved_any = true; moved_any;) {
-    moved_any = false;
+  const std::size_t below = colours.size() / count;  // floor(mean)
+  // Cheap single moves first, until none is left; then Kempe exchanges into colours below the
+  // mean, which need a chain search per try, and single moves again after each exchange pass.
+  for (int kempe_passes = 0; kempe_passes <= kMaximumKempePasses; ++kempe_passes) {
+    for (bool moved_any = true; moved_any;) {
+      moved_any = false;
+      for (ConstraintIndex c : schedule_order) {
+        const Colour a = colours[c];
+        if (sizes[a] <= target) continue;
+        const auto particles = graph.particles_of(c);
+        Colour best = static_cast<Colour>(count);
+        for (std::size_t w = 0; w < masks.words(); ++w) {
+          for (std::uint64_t free = ~masks.taken_word(particles, w); free != 0; free &= free - 1) {
+            const Colour k = static_cast<Colour>(w * 64 + std::countr_zero(free));
+            if (k >= count) break;
+            if (best == count || sizes[k] < sizes[best]) best = k;
+          }
+        }
+        if (best < count && sizes[best] + 1 < sizes[a]) {
+          move(graph, masks, colours, c, best);
+          --sizes[a];
+          ++sizes[best];
+          moved_any = true;
+        }
+      }
+    }
+    if (kempe_passes == kMaximumKempePasses) break;
+    bool exchanged = false;
     for (ConstraintIndex c : schedule_order) {
       const Colour a = colours[c];
       if (sizes[a] <= target) continue;
-      // Alone: into the smallest colour free at all of c's particles.
-      const auto particles = graph.particles_of(c);
-      Colour best = static_cast<Colour>(count);
-      for (std::size_t w = 0; w < masks.words(); ++w) {
-        for (std::uint64_t free = ~masks.taken_word(particles, w); free != 0; free &= free - 1) {
-          const Colour k = static_cast<Colour>(w * 64 + std::countr_zero(free));
-          if (k >= count) break;
-          if (best == count || sizes[k] < sizes[best]) best = k;
-        }
-      }
-      if (best < count && sizes[best] + 1 < sizes[a]) {
-        move(graph, masks, colours, c, best);
-        --sizes[a];
-        ++sizes[best];
-        moved_any = true;
-        continue;
-      }
-      // Through a Kempe chain with a smaller colour: swapping a and b along the chain moves
-      // (#a − #b) constraints from a to b.
+      // Swapping a and b along c's chain moves (#a − #b) constraints from a to b.
       for (Colour b = 0; b < count; ++b) {
-        if (b == a || sizes[b] + 1 >= sizes[a]) continue;
+        if (b == a || sizes[b] >= below) continue;
         if (!kempe_chain(c, a, b)) continue;
         std::size_t in_a = 0;
         for (ConstraintIndex x : chain) in_a += colours[x] == a;
@@ -241,10 +250,11 @@ Colouring balance_colours(const ConstraintGraph& graph, const Colouring& colouri
         }
         sizes[a] -= in_a - in_b;
         sizes[b] += in_a - in_b;
-        moved_any = true;
+        exchanged = true;
         break;
       }
     }
+    if (!exchanged) break;
   }
   return rebuild(graph, colouring, std::move(colours));
 }

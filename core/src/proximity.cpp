@@ -30,33 +30,39 @@ Real closest_segment_parameter(const Vector3r& p, const Vector3r& a, const Vecto
   return clamp01((p - a).dot(edge) / length_squared);
 }
 
+/// Barycentric coordinates of the point closest to p on the three edges of triangle (a, b, c).
+Vector3r closest_triangle_edge_barycentric(const Vector3r& p, const Vector3r& a,
+                                           const Vector3r& b, const Vector3r& c) {
+  const Real t_ab = closest_segment_parameter(p, a, b);
+  const Real t_bc = closest_segment_parameter(p, b, c);
+  const Real t_ca = closest_segment_parameter(p, c, a);
+  const std::array<Vector3r, 3> candidates = {Vector3r(1 - t_ab, t_ab, 0),
+                                              Vector3r(0, 1 - t_bc, t_bc),
+                                              Vector3r(t_ca, 0, 1 - t_ca)};
+  Vector3r best = candidates[0];
+  Real best_distance = (p - (a * best[0] + b * best[1] + c * best[2])).squaredNorm();
+  for (int k = 1; k < 3; ++k) {
+    const Vector3r& bary = candidates[k];
+    const Real distance = (p - (a * bary[0] + b * bary[1] + c * bary[2])).squaredNorm();
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = bary;
+    }
+  }
+  return best;
+}
+
 /// Barycentric coordinates (b0, b1, b2) of the point of triangle (a, b, c) closest to p, by
-/// the Voronoi regions of its vertices, edges and face. A triangle of zero area is treated as
-/// the union of its three edges.
+/// the Voronoi regions of its vertices, edges and face. A triangle of zero area (or so thin
+/// that its face coordinates would be mostly round-off) is treated as its three edges.
 Vector3r closest_triangle_barycentric(const Vector3r& p, const Vector3r& a, const Vector3r& b,
                                       const Vector3r& c) {
   const Vector3r ab = b - a;
   const Vector3r ac = c - a;
-  if (!(ab.cross(ac).squaredNorm() > kToleranceSquared)) {
-    // Collapsed triangle: the best of its edges.
-    const Real t_ab = closest_segment_parameter(p, a, b);
-    const Real t_bc = closest_segment_parameter(p, b, c);
-    const Real t_ca = closest_segment_parameter(p, c, a);
-    const std::array<Vector3r, 3> candidates = {Vector3r(1 - t_ab, t_ab, 0),
-                                                Vector3r(0, 1 - t_bc, t_bc),
-                                                Vector3r(t_ca, 0, 1 - t_ca)};
-    Vector3r best = candidates[0];
-    Real best_distance = (p - (a * best[0] + b * best[1] + c * best[2])).squaredNorm();
-    for (int k = 1; k < 3; ++k) {
-      const Vector3r& bary = candidates[k];
-      const Real distance = (p - (a * bary[0] + b * bary[1] + c * bary[2])).squaredNorm();
-      if (distance < best_distance) {
-        best_distance = distance;
-        best = bary;
-      }
-    }
-    return best;
-  }
+  const Real twice_area_squared = ab.cross(ac).squaredNorm();
+  if (!(twice_area_squared > kToleranceSquared) ||
+      !(twice_area_squared > kDegenerateTolerance * ab.squaredNorm() * ac.squaredNorm()))
+    return closest_triangle_edge_barycentric(p, a, b, c);
 
   const Vector3r ap = p - a;
   const Real d1 = ab.dot(ap);
@@ -91,7 +97,10 @@ Vector3r closest_triangle_barycentric(const Vector3r& p, const Vector3r& a, cons
     return Vector3r(0, 1 - t, t);
   }
 
-  // Face: va, vb, vc are the (scaled) barycentric coordinates of p's projection.
+  // Face: va, vb, vc are the (scaled) barycentric coordinates of p's projection, all
+  // positive unless round-off on a thin triangle says otherwise.
+  if (!(va >= 0 && vb >= 0 && vc >= 0 && va + vb + vc > 0))
+    return closest_triangle_edge_barycentric(p, a, b, c);
   const Real inverse_sum = 1 / (va + vb + vc);
   const Real v = vb * inverse_sum;
   const Real w = vc * inverse_sum;

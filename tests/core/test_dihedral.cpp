@@ -260,5 +260,42 @@ TEST(XPBDDihedralConstraint, InvalidTimeStepOrComplianceReturnsFalseAndKeepsLamb
   EXPECT_EQ(lambda, Real(0.125));
 }
 
+
+/// Inverse masses for the near-degenerate checks: about one in four static.
+template <std::size_t N>
+std::array<Real, N> masses_with_static(Random& random) {
+  std::array<Real, N> w;
+  for (Real& m : w) m = random.integer(0, 3) == 0 ? Real(0) : random.inverse_mass();
+  return w;
+}
+
+constexpr std::array<Real, 6> kNearDegenerateScales = {0, Real(1e-9), Real(1e-7), Real(1e-5),
+                                                       Real(1e-3), Real(1e-1)};
+
+/// Finite corrections, and all of them zero when the kernel reports false.
+template <std::size_t N>
+::testing::AssertionResult finite_or_rejected(bool ok, const std::array<Vector3r, N>& corr) {
+  if (!all_finite(corr)) return all_finite(corr);
+  if (!ok && max_norm(corr) != 0)
+    return ::testing::AssertionFailure() << "false with a non-zero correction";
+  return ::testing::AssertionSuccess();
+}
+
+TEST(DihedralConstraint, NearDegenerateInputStaysFinite) {
+  Random random(306);
+  for (int trial = 0; trial < 300; ++trial) {
+    const Real scale = kNearDegenerateScales[trial % kNearDegenerateScales.size()];
+    const Points x = near_degenerate_points<4>(random, trial % 3, scale);
+    const Masses w = masses_with_static<4>(random);
+    const Real rest = random.uniform(0, kPi);
+    const Projection r = project(x, w, rest, 1);
+    EXPECT_TRUE(finite_or_rejected(r.ok, r.corr)) << "scale " << scale;
+    Real lambda = 0;
+    const Projection soft = project_xpbd(x, w, rest, Real(1e-6), Real(0.01), lambda);
+    EXPECT_TRUE(finite_or_rejected(soft.ok, soft.corr)) << "scale " << scale;
+    EXPECT_TRUE(std::isfinite(lambda));
+  }
+}
+
 }  // namespace
 }  // namespace tessera::test

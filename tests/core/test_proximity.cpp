@@ -565,5 +565,59 @@ TEST(EdgeEdgeDistanceConstraint, DegenerateInput) {
   EXPECT_TRUE(near_relative(corr[2], Vector3r(0, -0.5, 0)));
 }
 
+
+/// Inverse masses for the near-degenerate checks: about one in four static.
+template <std::size_t N>
+std::array<Real, N> masses_with_static(Random& random) {
+  std::array<Real, N> w;
+  for (Real& m : w) m = random.integer(0, 3) == 0 ? Real(0) : random.inverse_mass();
+  return w;
+}
+
+constexpr std::array<Real, 6> kNearDegenerateScales = {0, Real(1e-9), Real(1e-7), Real(1e-5),
+                                                       Real(1e-3), Real(1e-1)};
+
+/// Finite corrections, and all of them zero when the kernel reports false.
+template <std::size_t N>
+::testing::AssertionResult finite_or_rejected(bool ok, const std::array<Vector3r, N>& corr) {
+  if (!all_finite(corr)) return all_finite(corr);
+  if (!ok && max_norm(corr) != 0)
+    return ::testing::AssertionFailure() << "false with a non-zero correction";
+  return ::testing::AssertionSuccess();
+}
+
+TEST(ProximityConstraints, NearDegenerateInputStaysFinite) {
+  Random random(431);
+  for (int trial = 0; trial < 600; ++trial) {
+    const Real scale = kNearDegenerateScales[trial % kNearDegenerateScales.size()];
+    const int pattern = (trial / 6) % 3;
+    const Real rest = random.uniform(0, 1);
+    const Points<3> x3 = near_degenerate_points<3>(random, pattern, scale);
+    const Projection<3> ep = edge_point(x3, masses_with_static<3>(random), rest, 1, 1);
+    EXPECT_TRUE(finite_or_rejected(ep.ok, ep.corr)) << "scale " << scale;
+    const Points<4> x4 = near_degenerate_points<4>(random, pattern, scale);
+    const Masses<4> w4 = masses_with_static<4>(random);
+    const Projection<4> tp = triangle_point(x4, w4, rest, 1, 1);
+    EXPECT_TRUE(finite_or_rejected(tp.ok, tp.corr)) << "scale " << scale;
+    const Projection<4> ee = edge_edge(x4, w4, rest, 1, 1);
+    EXPECT_TRUE(finite_or_rejected(ee.ok, ee.corr)) << "scale " << scale;
+    // A thin sliver triangle, static, and a movable point: one step puts the point at the
+    // rest distance, up to the sliver's width (a sliver too thin for face coordinates is
+    // measured to its edges).
+    const Real apex = random.uniform(0, 1);
+    const Points<4> sliver = {
+        Vector3r(apex, random.uniform(0, 1) * scale, random.uniform(-1, 1)) +
+            (trial % 2 ? Vector3r::Zero() : random.vector()),  // over the face, or anywhere
+        Vector3r(0, 0, 0), Vector3r(1, 0, 0), Vector3r(apex, scale, 0)};
+    const Projection<4> thin = triangle_point(sliver, {1, 0, 0, 0}, rest, 1, 1);
+    EXPECT_TRUE(finite_or_rejected(thin.ok, thin.corr)) << "scale " << scale;
+    if (thin.ok) {
+      EXPECT_NEAR(triangle_point_distance(applied(sliver, thin.corr)), rest,
+                  2 * scale + 100 * kRoundOff)
+          << "scale " << scale;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace tessera::test

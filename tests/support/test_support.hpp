@@ -189,4 +189,21 @@ inline ::testing::AssertionResult near_relative(const Vector3r& a, const Vector3
                                        << " (|diff| " << (a - b).norm() << ")";
 }
 
+/// N points near a degenerate configuration, for "never NaN" checks: pattern 0 puts them all
+/// near one point, 1 near a line, 2 near a plane; each is displaced from the exact degenerate
+/// shape by at most `scale` per component (scale 0 gives the exact degenerate shape).
+template <std::size_t N>
+std::array<Vector3r, N> near_degenerate_points(Random& random, int pattern, Real scale) {
+  const Vector3r origin = random.vector();
+  const Vector3r u = random.unit_vector(), v = random.unit_vector();
+  std::array<Vector3r, N> x;
+  for (auto& p : x) {
+    p = origin;
+    if (pattern >= 1) p += random.uniform(-1, 1) * u;
+    if (pattern >= 2) p += random.uniform(-1, 1) * v;
+    p += scale * random.vector();
+  }
+  return x;
+}
+
 }  // namespace tessera::test

@@ -43,8 +43,11 @@ class PositionBasedDynamics {
   ///   n1 = (p2 - p0) × (p3 - p0),   n2 = (p3 - p1) × (p2 - p1).
   ///   C = acos(n̂1 · n̂2) - φ0,   φ = acos(n̂1 · n̂2) ∈ [0, π]  (0 when the stencil is flat).
   /// ∇C is the gradient of the unsigned angle φ (the signed-angle gradients of Bridson et al.
-  /// with the sign of (n1 × n2) · (p3 - p2)). Degenerate when the edge has zero length or a
-  /// triangle has zero area.
+  /// with the sign of (n1 × n2) · (p3 - p2)). φ is evaluated as |atan2((n1 × n2) · ê, n1 · n2)|
+  /// (the same angle, accurate near 0 and π), and the gradient has no 1/sin φ factor, so flat
+  /// and fully folded stencils give finite corrections. Where the sign is zero (φ = 0 or π) it
+  /// is taken as +1: a flat stencil with φ0 > 0 buckles deterministically. Degenerate when the
+  /// edge has zero length or a triangle has zero area.
   static bool solve_DihedralConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                        Real invMass1, const Vector3r& p2, Real invMass2,
                                        const Vector3r& p3, Real invMass3, const Real restAngle,
@@ -57,6 +60,8 @@ class PositionBasedDynamics {
   ///   p3 lies on the side of triangle (p0, p1, p2) its right-handed normal points to),
   ///   ∇_{p1} C = (p2 - p0) × (p3 - p0) / 6,  ∇_{p2} C = (p3 - p0) × (p1 - p0) / 6,
   ///   ∇_{p3} C = (p1 - p0) × (p2 - p0) / 6,  ∇_{p0} C = -(∇_{p1} + ∇_{p2} + ∇_{p3}).
+  /// Degenerate only when Σ w_i |∇_i C|² vanishes (all four points on one line, or every
+  /// particle static): a flat tetrahedron with a proper face is projected (inflated to V0).
   static bool solve_VolumeConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                      Real invMass1, const Vector3r& p2, Real invMass2,
                                      const Vector3r& p3, Real invMass3, const Real restVolume,
@@ -68,7 +73,8 @@ class PositionBasedDynamics {
   /// (t clamped to [0, 1], held fixed while differentiating), n = (p - q)/|p - q|,
   ///   C = |p - q| - d0,   ∇_p C = n,  ∇_{p0} C = -(1 - t) n,  ∇_{p1} C = -t n.
   /// compressionStiffness applies when C < 0, stretchStiffness when C ≥ 0.
-  /// Degenerate when p lies on the segment (or the segment has zero length and p is on it).
+  /// A zero-length segment counts as the point p0 (t = 0). Degenerate when p lies on the
+  /// segment.
   static bool solve_EdgePointDistanceConstraint(const Vector3r& p, Real invMass,
                                                 const Vector3r& p0, Real invMass0,
                                                 const Vector3r& p1, Real invMass1,
@@ -80,7 +86,9 @@ class PositionBasedDynamics {
   /// Point–triangle distance: q = b0 p0 + b1 p1 + b2 p2 is the closest point of triangle
   /// (p0, p1, p2) to p (barycentric b held fixed while differentiating), n = (p - q)/|p - q|,
   ///   C = |p - q| - d0,   ∇_p C = n,  ∇_{pi} C = -b_i n.
-  /// Stiffness as for the point–edge constraint. Degenerate when p lies on the triangle.
+  /// Stiffness as for the point–edge constraint. A triangle of zero area (or so thin that
+  /// |(p1 - p0) × (p2 - p0)|² ≤ kDegenerateTolerance |p1 - p0|² |p2 - p0|²) is measured to its
+  /// three edges. Degenerate when p lies on the triangle.
   static bool solve_TrianglePointDistanceConstraint(
       const Vector3r& p, Real invMass, const Vector3r& p0, Real invMass0, const Vector3r& p1,
       Real invMass1, const Vector3r& p2, Real invMass2, const Real restDist,
@@ -92,7 +100,9 @@ class PositionBasedDynamics {
   /// differentiating), n = (a - b)/|a - b|,
   ///   C = |a - b| - d0,  ∇_{p0} C = (1 - s) n, ∇_{p1} C = s n, ∇_{p2} C = -(1 - t) n,
   ///   ∇_{p3} C = -t n.
-  /// Stiffness as for the point–edge constraint. Degenerate when the segments touch.
+  /// Stiffness as for the point–edge constraint. A zero-length segment counts as its first
+  /// point (s = 0 or t = 0); for parallel segments one closest pair of the overlap is used.
+  /// Degenerate when the segments touch.
   static bool solve_EdgeEdgeDistanceConstraint(const Vector3r& p0, Real invMass0,
                                                const Vector3r& p1, Real invMass1,
                                                const Vector3r& p2, Real invMass2,
@@ -117,6 +127,8 @@ class PositionBasedDynamics {
                                               Matrix4r& Q);
 
   /// C = ½ Σ_ij Q_ij p_i · p_j  (≥ 0, zero when the stencil is flat),  ∇_{pi} C = Σ_j Q_ij p_j.
+  /// A stencil with ∇C = 0 (flat for its Q) satisfies the constraint: zero corrections and
+  /// true. False (zero corrections) when every particle is static.
   static bool solve_IsometricBendingConstraint(const Vector3r& p0, Real invMass0,
                                                const Vector3r& p1, Real invMass1,
                                                const Vector3r& p2, Real invMass2,

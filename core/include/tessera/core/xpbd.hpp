@@ -44,7 +44,8 @@ class XPBD {
                                               const Vector3r& p2, const Vector3r& p3,
                                               Matrix4r& Q);
 
-  /// C = ½ Σ_ij Q_ij p_i · p_j.
+  /// C = ½ Σ_ij Q_ij p_i · p_j. A stencil with ∇C = 0 (flat for its Q) returns true with zero
+  /// corrections and λ unchanged.
   static bool solve_IsometricBendingConstraint(const Vector3r& p0, Real invMass0,
                                                const Vector3r& p1, Real invMass1,
                                                const Vector3r& p2, Real invMass2,

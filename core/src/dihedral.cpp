@@ -8,10 +8,12 @@
 // gradient of ψ (Bridson, Marino, Fedkiw 2003) has no 1/sin φ factor, so it stays finite at a
 // flat or fully folded stencil:
 //   ∇_{p0} ψ = -|e| N1 / |N1|²,   ∇_{p1} ψ = -|e| N2 / |N2|²,
-//   ∇_{p2} ψ = -(1 - s0) ∇_{p0} ψ - (1 - s1) ∇_{p1} ψ,   ∇_{p3} ψ = -s0 ∇_{p0} ψ - s1 ∇_{p1} ψ,
-// where s_k = (p_k - p2) · e / |e|² is where wing p_k projects onto the edge. ∇φ = sign(ψ) ∇ψ,
-// with sign(ψ) taken as +1 at ψ = 0 (the one-sided gradient of φ for ψ ≥ 0): a flat stencil
-// with a non-zero rest angle buckles deterministically towards positive ψ.
+//   ∇_{p2} ψ = -(1 - s0) ∇_{p0} ψ - (1 - s1) ∇_{p1} ψ,
+//   ∇_{p3} ψ = -s0 ∇_{p0} ψ - s1 ∇_{p1} ψ,
+// where s_k = (p_k - p2) · e / |e|² is where wing p_k projects onto the edge.
+// ∇φ = sign(ψ) ∇ψ, with sign(ψ) taken as +1 at ψ = 0 (the one-sided gradient of φ for
+// ψ ≥ 0): a flat stencil with a non-zero rest angle buckles deterministically towards
+// positive ψ.
 #include <cmath>
 
 #include <Eigen/Geometry>

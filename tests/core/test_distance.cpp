@@ -81,7 +81,8 @@ TEST(DistanceConstraint, InvariantsOnRandomInput) {
     EXPECT_TRUE(conserves_angular_momentum(x, r.corr, w));
 
     // Along -w∇C with the finite-difference gradient, scaled by k C / Σ w |∇C|².
-    const auto grad = numeric_gradient<2>([&](const Points& y) { return distance_constraint(y, rest); }, x);
+    const auto constraint = [&](const Points& y) { return distance_constraint(y, rest); };
+    const auto grad = numeric_gradient<2>(constraint, x);
     Real fitted = 0;
     EXPECT_TRUE(along_weighted_gradient(r.corr, w, grad, kFiniteDifferenceTolerance, &fitted));
     const Real C = distance_constraint(x, rest);
@@ -164,7 +165,8 @@ TEST(XPBDDistanceConstraint, ZeroComplianceEqualsPBDWithStiffnessOne) {
 }
 
 TEST(XPBDDistanceConstraint, FirstIterationHandChecked) {
-  // C = 2, w = (1, 1), α = 0.02, dt = 0.1: α̃ = 2, Δλ = -2 / (2 + 2) = -0.5, Δp0 = -0.5 (1,0,0).
+  // C = 2, w = (1, 1), α = 0.02, dt = 0.1: α̃ = 2, Δλ = -2 / (2 + 2) = -0.5,
+  // Δp0 = -0.5 (1, 0, 0).
   const Points x = {Vector3r(3, 0, 0), Vector3r(0, 0, 0)};
   Real lambda = 0;
   const Projection r = project_xpbd(x, {1, 1}, 1, Real(0.02), Real(0.1), lambda);

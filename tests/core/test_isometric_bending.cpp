@@ -23,8 +23,8 @@ struct Projection {
 
 Matrix4r bending_matrix(const Points& rest) {
   Matrix4r Q;
-  EXPECT_TRUE(
-      PositionBasedDynamics::init_IsometricBendingConstraint(rest[0], rest[1], rest[2], rest[3], Q));
+  EXPECT_TRUE(PositionBasedDynamics::init_IsometricBendingConstraint(rest[0], rest[1], rest[2],
+                                                                     rest[3], Q));
   return Q;
 }
 
@@ -116,7 +116,8 @@ TEST(IsometricBending, MatrixStructure) {
     // Rank one: only one non-zero eigenvalue.
     EXPECT_LE(std::abs(eigen.eigenvalues()[2]), 10 * kRoundOff * scale);
     // The rest shape's rigid motion leaves Q unchanged.
-    const Matrix4r moved = bending_matrix(transformed(rest, random.rotation(), random.vector(-3, 3)));
+    const Matrix4r moved =
+        bending_matrix(transformed(rest, random.rotation(), random.vector(-3, 3)));
     EXPECT_LE((moved - Q).cwiseAbs().maxCoeff(), 50 * kRoundOff * scale);
     // Q x = 0 for every coordinate of a planar stencil, so C = 0 and no correction.
     if (trial % 2 == 0) {

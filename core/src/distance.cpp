@@ -1,56 +1,41 @@
-// Distance constraint C = |p0 - p1| - l0: the one formula of the family (value and gradients)
-// and its PBD (stiffness) and XPBD (compliance) projections. Edges of cloth and rods, struts
-// of soft bodies, and the building block every other family is checked against.
+// The scalar API of the distance constraint: one lane of the family's formula
+// (kernels/distance-inl.h), the same code the batched kernel runs on W lanes.
 #include <tessera/core/position_based_dynamics.hpp>
 #include <tessera/core/xpbd.hpp>
 
-#include "projection.hpp"
+#include "kernels/distance-inl.h"
 
 namespace tessera {
-namespace {
 
-/// C and ∇C of the distance constraint. False when p0 and p1 coincide (the direction is
-/// undefined).
-bool evaluate_distance(const Vector3r& p0, const Vector3r& p1, Real rest_length, Real& C,
-                       detail::Gradients<2>& grad) {
-  const Vector3r difference = p0 - p1;
-  const Real length = difference.norm();
-  if (!(length > kDegenerateTolerance)) return false;
-  const Vector3r direction = difference / length;
-  C = length - rest_length;
-  grad = {direction, -direction};
-  return true;
-}
-
-}  // namespace
+namespace lanes = HWY_NAMESPACE;
 
 bool PositionBasedDynamics::solve_DistanceConstraint(const Vector3r& p0, Real invMass0,
                                                      const Vector3r& p1, Real invMass1,
                                                      const Real restLength,
                                                      const Real stiffness, Vector3r& corr0,
                                                      Vector3r& corr1) {
-  Vector3r* const corr[2] = {&corr0, &corr1};
-  Real C = 0;
-  detail::Gradients<2> grad;
-  if (!evaluate_distance(p0, p1, restLength, C, grad)) {
-    detail::zero_corrections<2>(corr);
-    return false;
-  }
-  return detail::project_pbd<2>(C, grad, {invMass0, invMass1}, stiffness, corr);
+  const auto value =
+      lanes::distance_constraint<Real>(lanes::from_eigen(p0), lanes::from_eigen(p1), restLength);
+  const Real w[2] = {invMass0, invMass1};
+  lanes::Vec3<Real> corr[2];
+  const bool projected = lanes::project_pbd(value, w, stiffness, corr);
+  corr0 = lanes::to_eigen(corr[0]);
+  corr1 = lanes::to_eigen(corr[1]);
+  return projected;
 }
 
 bool XPBD::solve_DistanceConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                     Real invMass1, const Real restLength, const Real compliance,
                                     const Real dt, Real& lambda, Vector3r& corr0,
                                     Vector3r& corr1) {
-  Vector3r* const corr[2] = {&corr0, &corr1};
-  Real C = 0;
-  detail::Gradients<2> grad;
-  if (!evaluate_distance(p0, p1, restLength, C, grad)) {
-    detail::zero_corrections<2>(corr);
-    return false;
-  }
-  return detail::project_xpbd<2>(C, grad, {invMass0, invMass1}, compliance, dt, lambda, corr);
+  const auto value =
+      lanes::distance_constraint<Real>(lanes::from_eigen(p0), lanes::from_eigen(p1), restLength);
+  const Real w[2] = {invMass0, invMass1};
+  lanes::Vec3<Real> corr[2];
+  const bool projected = lanes::project_xpbd(value, w, compliance, dt, lambda, corr);
+  corr0 = lanes::to_eigen(corr[0]);
+  corr1 = lanes::to_eigen(corr[1]);
+  return projected;
 }
 
 }  // namespace tessera

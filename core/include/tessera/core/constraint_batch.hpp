@@ -1,0 +1,60 @@
+// What every constraint family's batch data has in common, and how a batch is projected.
+//
+// A family's constraints are stored structure-of-arrays: particle[slot][c] is the particle in
+// slot `slot` of constraint c, and each rest value or parameter is one array indexed by c.
+// All arrays are padded (padded_size) so a kernel can load W consecutive constraints from any
+// position. A batched kernel projects a range [begin, end) of one family; the constraints of
+// one range must not share a movable particle (a colour of the colouring stage guarantees
+// it), because W of them are gathered, corrected and scattered at once.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <string>
+
+#include <tessera/core/error.hpp>
+
+#include <tessera/core/aligned_vector.hpp>
+#include <tessera/core/particle_state.hpp>
+#include <tessera/core/real.hpp>
+
+namespace tessera {
+
+/// Which parameter a projection uses: PBD stiffness k ∈ [0, 1] (Müller et al. 2007) or XPBD
+/// compliance α with the accumulated multiplier λ (Macklin et al. 2016).
+enum class ConstraintSemantics { stiffness, compliance };
+
+struct ProjectionSettings {
+  ConstraintSemantics semantics = ConstraintSemantics::stiffness;
+  /// The (sub)step's time step, used by compliance semantics (α̃ = α / dt²).
+  Real dt = Real(1) / Real(60);
+};
+
+/// The particle indices of N-particle constraints, one padded array per slot.
+template <int N>
+struct ConstraintParticles {
+  static constexpr int kParticlesPerConstraint = N;
+  /// Number of constraints.
+  std::size_t count = 0;
+  /// Number of particles the indices were validated against: a ParticleArrays projected with
+  /// these constraints must hold at least this many.
+  std::size_t particle_count = 0;
+  std::array<AlignedVector<ParticleIndex>, N> particle;
+};
+
+/// Checks, once per call and not per constraint, that [begin, end) lies within a family of
+/// `count` constraints built for at most particles.count particles. Throws InvalidInput.
+inline void check_projection_range(const char* family, std::size_t begin, std::size_t end,
+                                   std::size_t count, std::size_t particle_count,
+                                   const ParticleArrays& particles) {
+  if (begin > end || end > count)
+    throw InvalidInput(std::string(family) + " constraints: range [" + std::to_string(begin) +
+                       ", " + std::to_string(end) + ") is outside [0, " +
+                       std::to_string(count) + ")");
+  if (particles.count < particle_count)
+    throw InvalidInput(std::string(family) + " constraints: built for " +
+                       std::to_string(particle_count) + " particles, projected on " +
+                       std::to_string(particles.count));
+}
+
+}  // namespace tessera

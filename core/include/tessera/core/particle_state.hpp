@@ -1,0 +1,71 @@
+// Particle state in structure-of-arrays form: the layout the batched kernels gather from.
+//
+//   x[0..n)  y[0..n)  z[0..n)  inverse_mass[0..n)        ← kernels read and write these
+//   previous_x/y/z, velocity_x/y/z                        ← time stepping (XPBD) only
+//
+// One array per coordinate, each 64-byte aligned and padded (padded_size), so a kernel loads
+// W lanes of one coordinate with one gather and a time-stepping loop runs over whole vectors.
+// Padding particles have inverse mass 0 and sit at the origin. An inverse mass of 0 makes a
+// particle static: no kernel ever writes it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include <tessera/core/aligned_vector.hpp>
+#include <tessera/core/real.hpp>
+#include <tessera/core/simd.hpp>
+
+namespace tessera {
+
+/// Index of a particle in a ParticleState (and of a vertex in a mesh).
+using ParticleIndex = std::uint32_t;
+
+class ParticleState {
+ public:
+  ParticleState() = default;
+  /// n particles at the origin, all static.
+  explicit ParticleState(std::size_t n);
+  /// Particles at the given positions with the given inverse masses (0 = static), at rest.
+  /// Throws InvalidInput when the sizes differ, a position is not finite, or an inverse mass
+  /// is negative or not finite; the message names the particle.
+  ParticleState(std::span<const Vector3r> positions, std::span<const Real> inverse_masses);
+
+  std::size_t size() const { return count_; }
+
+  Vector3r position(std::size_t i) const { return Vector3r(x[i], y[i], z[i]); }
+  void set_position(std::size_t i, const Vector3r& p) {
+    x[i] = p.x();
+    y[i] = p.y();
+    z[i] = p.z();
+  }
+  Vector3r velocity(std::size_t i) const {
+    return Vector3r(velocity_x[i], velocity_y[i], velocity_z[i]);
+  }
+
+  AlignedVector<Real> x, y, z;
+  AlignedVector<Real> inverse_mass;
+  AlignedVector<Real> previous_x, previous_y, previous_z;
+  AlignedVector<Real> velocity_x, velocity_y, velocity_z;
+
+ private:
+  std::size_t count_ = 0;
+};
+
+/// What a batched kernel reads and writes of the particles: raw SoA pointers, so kernels
+/// stay free of container types. The arrays hold at least `count` particles.
+struct ParticleArrays {
+  Real* x;
+  Real* y;
+  Real* z;
+  const Real* inverse_mass;
+  std::size_t count;
+
+  static ParticleArrays of(ParticleState& state) {
+    return {state.x.data(), state.y.data(), state.z.data(), state.inverse_mass.data(),
+            state.size()};
+  }
+};
+
+}  // namespace tessera

@@ -1,0 +1,79 @@
+// Validation at the door: every make_<family>_constraints function checks its plain input here
+// before building SoA batches, so the hot loops never check anything. Messages name the
+// family, the constraint's position in the input and the problem, e.g.
+//   "distance constraint 17: particle index 99 is out of range (50 particles)".
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <span>
+#include <string>
+
+#include <tessera/core/constraint_batch.hpp>
+#include <tessera/core/error.hpp>
+#include <tessera/core/simd.hpp>
+
+namespace tessera::detail {
+
+class ConstraintValidator {
+ public:
+  ConstraintValidator(std::string family, std::size_t particle_count)
+      : family_(std::move(family)), particle_count_(particle_count) {}
+
+  const std::string& family() const { return family_; }
+  std::size_t particle_count() const { return particle_count_; }
+
+  /// Throws InvalidInput "<family> constraint <index>: <problem>".
+  [[noreturn]] void fail(std::size_t constraint, const std::string& problem) const;
+  /// Throws InvalidInput "<family> constraints: <problem>" (about the input as a whole).
+  [[noreturn]] void fail_input(const std::string& problem) const;
+
+  /// A finite value (and, with `positive`, one above zero; with `non_negative`, ≥ 0).
+  void check_finite(std::size_t constraint, const char* what, Real value) const;
+  void check_positive(std::size_t constraint, const char* what, Real value) const;
+  void check_non_negative(std::size_t constraint, const char* what, Real value) const;
+  /// A finite parameter shared by every constraint of the input, ≥ 0.
+  void check_parameter(const char* what, Real value) const;
+
+  /// Splits a flat index list (N per constraint) into padded per-slot arrays, checking the
+  /// length, that every index is in range and that no constraint names a particle twice.
+  template <int N>
+  ConstraintParticles<N> particles(std::span<const ParticleIndex> flat) const {
+    if (flat.size() % N != 0)
+      fail_input(std::to_string(flat.size()) + " particle indices is not a multiple of " +
+                 std::to_string(N));
+    ConstraintParticles<N> result;
+    result.count = flat.size() / N;
+    result.particle_count = particle_count_;
+    for (auto& slot : result.particle) slot.assign(padded_size(result.count), 0);
+    for (std::size_t c = 0; c < result.count; ++c) {
+      for (int k = 0; k < N; ++k) {
+        const ParticleIndex index = flat[c * N + k];
+        check_index(c, index);
+        for (int j = 0; j < k; ++j)
+          if (flat[c * N + j] == index) fail_repeated(c, index);
+        result.particle[k][c] = index;
+      }
+    }
+    return result;
+  }
+
+  void check_index(std::size_t constraint, ParticleIndex index) const {
+    if (index >= particle_count_) fail_out_of_range(constraint, index);
+  }
+  [[noreturn]] void fail_out_of_range(std::size_t constraint, ParticleIndex index) const;
+  [[noreturn]] void fail_repeated(std::size_t constraint, ParticleIndex index) const;
+
+ private:
+  std::string family_;
+  std::size_t particle_count_;
+};
+
+/// A padded copy of n values all equal to value.
+inline AlignedVector<Real> filled(std::size_t n, Real value) {
+  AlignedVector<Real> result(padded_size(n), Real(0));
+  std::fill(result.begin(), result.begin() + static_cast<std::ptrdiff_t>(n), value);
+  return result;
+}
+
+}  // namespace tessera::detail

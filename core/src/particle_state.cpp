@@ -1,0 +1,36 @@
+#include <tessera/core/error.hpp>
+#include <tessera/core/particle_state.hpp>
+
+#include <cmath>
+#include <string>
+
+namespace tessera {
+
+ParticleState::ParticleState(std::size_t n) : count_(n) {
+  const std::size_t padded = padded_size(n);
+  for (AlignedVector<Real>* array : {&x, &y, &z, &inverse_mass, &previous_x, &previous_y,
+                                     &previous_z, &velocity_x, &velocity_y, &velocity_z})
+    array->assign(padded, Real(0));
+}
+
+ParticleState::ParticleState(std::span<const Vector3r> positions,
+                             std::span<const Real> inverse_masses)
+    : ParticleState(positions.size()) {
+  if (inverse_masses.size() != positions.size())
+    throw InvalidInput("particles: " + std::to_string(positions.size()) + " positions but " +
+                       std::to_string(inverse_masses.size()) + " inverse masses");
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    if (!positions[i].allFinite())
+      throw InvalidInput("particle " + std::to_string(i) + ": position is not finite");
+    if (!std::isfinite(inverse_masses[i]) || inverse_masses[i] < 0)
+      throw InvalidInput("particle " + std::to_string(i) + ": inverse mass " +
+                         std::to_string(inverse_masses[i]) + " must be finite and ≥ 0");
+    set_position(i, positions[i]);
+    previous_x[i] = x[i];
+    previous_y[i] = y[i];
+    previous_z[i] = z[i];
+    inverse_mass[i] = inverse_masses[i];
+  }
+}
+
+}  // namespace tessera

@@ -1,0 +1,159 @@
+// The batched distance kernel against the scalar API, on every SIMD target the machine has,
+// plus validation of the batch input.
+#include <tessera/core/distance_constraints.hpp>
+#include <tessera/core/error.hpp>
+#include <tessera/core/position_based_dynamics.hpp>
+#include <tessera/core/xpbd.hpp>
+
+#include "batch_test_support.hpp"
+
+namespace tessera {
+namespace {
+
+using test::Random;
+
+test::DisjointConstraintSet<2> random_edges(Random& random, std::size_t count) {
+  return test::make_disjoint_constraints<2>(random, count, Real(0.2), [](Random& r) {
+    const Vector3r a = r.vector(-5, 5);
+    return std::array<Vector3r, 2>{a, a + r.unit_vector() * r.uniform(Real(0.2), 2)};
+  });
+}
+
+/// Rest lengths differ from the current ones by up to ±30 %.
+DistanceConstraints build(const test::DisjointConstraintSet<2>& set, Random& random) {
+  std::vector<Vector3r> rest = set.positions;
+  for (Vector3r& p : rest) p *= random.uniform(Real(0.7), Real(1.3));
+  DistanceConstraints constraints =
+      make_distance_constraints({set.indices, rest, Real(0.8), Real(1e-4)});
+  return constraints;
+}
+
+TEST(DistanceBatch, MatchesScalarApiOnEveryTarget) {
+  test::for_each_simd_target([](const std::string&) {
+    for (unsigned seed = 1; seed <= 6; ++seed) {
+      Random random(seed);
+      const std::size_t count = std::size_t(random.integer(1, 300));
+      const auto set = random_edges(random, count);
+      DistanceConstraints constraints = build(set, random);
+      const auto [begin, end] = test::random_range(random, count);
+      for (const auto semantics :
+           {ConstraintSemantics::stiffness, ConstraintSemantics::compliance}) {
+        const ProjectionSettings settings{semantics, Real(1) / 120};
+        ParticleState state(set.positions, set.inverse_masses);
+        std::vector<Vector3r> expected = set.positions;
+        std::vector<Real> expected_lambda(count, Real(0.25));
+        std::fill(constraints.lambda.begin(), constraints.lambda.begin() + long(count),
+                  Real(0.25));
+        for (std::size_t c = begin; c < end; ++c) {
+          const ParticleIndex i = set.indices[2 * c], j = set.indices[2 * c + 1];
+          Vector3r corr0, corr1;
+          if (semantics == ConstraintSemantics::stiffness)
+            PositionBasedDynamics::solve_DistanceConstraint(
+                expected[i], set.inverse_masses[i], expected[j], set.inverse_masses[j],
+                constraints.rest_length[c], constraints.stiffness[c], corr0, corr1);
+          else
+            XPBD::solve_DistanceConstraint(expected[i], set.inverse_masses[i], expected[j],
+                                           set.inverse_masses[j], constraints.rest_length[c],
+                                           constraints.compliance[c], settings.dt,
+                                           expected_lambda[c], corr0, corr1);
+          if (set.inverse_masses[i] > 0) expected[i] += corr0;
+          if (set.inverse_masses[j] > 0) expected[j] += corr1;
+        }
+        project_distance_constraints(ParticleArrays::of(state), constraints, begin, end,
+                                     settings);
+        EXPECT_TRUE(test::positions_match(state, expected, 10));
+        for (std::size_t c = 0; c < count; ++c) {
+          if (semantics == ConstraintSemantics::compliance && c >= begin && c < end)
+            EXPECT_NEAR(constraints.lambda[c], expected_lambda[c],
+                        test::kBatchTolerance * (1 + std::abs(expected_lambda[c])));
+          else
+            EXPECT_EQ(constraints.lambda[c], Real(0.25)) << "λ outside the range changed";
+        }
+      }
+    }
+  });
+}
+
+TEST(DistanceBatch, BitwiseReproducibleOnEveryTarget) {
+  test::for_each_simd_target([](const std::string&) {
+    Random random(42);
+    const auto set = random_edges(random, 257);
+    DistanceConstraints constraints = build(set, random);
+    ParticleState first(set.positions, set.inverse_masses), second = first;
+    for (int iteration = 0; iteration < 5; ++iteration) {
+      project_distance_constraints(ParticleArrays::of(first), constraints, 0, 257, {});
+      project_distance_constraints(ParticleArrays::of(second), constraints, 0, 257, {});
+    }
+    EXPECT_TRUE(test::same_bits(first, second));
+  });
+}
+
+TEST(DistanceBatch, StaticParticlesAndEmptyRangesAreNotWritten) {
+  Random random(7);
+  const auto set = random_edges(random, 100);
+  DistanceConstraints constraints = build(set, random);
+  ParticleState state(set.positions, set.inverse_masses);
+  const ParticleState before = state;
+  project_distance_constraints(ParticleArrays::of(state), constraints, 40, 40, {});
+  EXPECT_TRUE(test::same_bits(state, before));
+  project_distance_constraints(ParticleArrays::of(state), constraints, 0, 100, {});
+  for (std::size_t i = 0; i < set.positions.size(); ++i)
+    if (set.inverse_masses[i] == 0) EXPECT_EQ(state.position(i), before.position(i));
+}
+
+TEST(DistanceBatch, AllTargetsAvailableIncludeThePortableFallback) {
+  const auto targets = available_simd_targets();
+  ASSERT_FALSE(targets.empty());
+  EXPECT_EQ(targets.front(), active_simd_target());
+  EXPECT_THROW(force_simd_target("NO-SUCH-ISA"), InvalidInput);
+  EXPECT_EQ(active_simd_target(), targets.front());
+}
+
+// ------------------------------------------------------------------ validation at the door
+std::string error_of(const DistanceConstraintInput& input) {
+  try {
+    make_distance_constraints(input);
+  } catch (const InvalidInput& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(DistanceBatchValidation, NamesTheConstraintAndTheProblem) {
+  const std::vector<Vector3r> rest = {Vector3r(0, 0, 0), Vector3r(1, 0, 0), Vector3r(1, 0, 0),
+                                      Vector3r(0, Real(NAN), 0)};
+  const std::vector<ParticleIndex> out_of_range = {0, 1, 1, 9};
+  EXPECT_EQ(error_of({out_of_range, rest}),
+            "distance constraint 1: particle index 9 is out of range (4 particles)");
+  const std::vector<ParticleIndex> repeated = {0, 1, 2, 2};
+  EXPECT_EQ(error_of({repeated, rest}), "distance constraint 1: particle 2 appears twice");
+  const std::vector<ParticleIndex> odd = {0, 1, 2};
+  EXPECT_EQ(error_of({odd, rest}),
+            "distance constraints: 3 particle indices is not a multiple of 2");
+  const std::vector<ParticleIndex> coincident = {0, 1, 1, 2};
+  EXPECT_EQ(error_of({coincident, rest}),
+            "distance constraint 1: rest length is 0 (particles 1 and 2 coincide at rest)");
+  const std::vector<ParticleIndex> not_finite = {0, 3};
+  EXPECT_EQ(error_of({not_finite, rest}), "distance constraint 0: rest position is not finite");
+  const std::vector<ParticleIndex> fine = {0, 1};
+  EXPECT_EQ(error_of({fine, rest, Real(-1)}),
+            "distance constraints: stiffness is -1, must be finite and ≥ 0");
+  EXPECT_EQ(error_of({fine, rest, 1, Real(INFINITY)}),
+            "distance constraints: compliance is inf, must be finite and ≥ 0");
+  EXPECT_EQ(error_of({fine, rest}), "");
+}
+
+TEST(DistanceBatchValidation, RangeAndParticleCountAreChecked) {
+  const std::vector<Vector3r> rest = {Vector3r(0, 0, 0), Vector3r(1, 0, 0)};
+  const std::vector<ParticleIndex> edge = {0, 1};
+  DistanceConstraints constraints = make_distance_constraints({edge, rest});
+  ParticleState two(rest, std::vector<Real>{1, 1});
+  EXPECT_THROW(project_distance_constraints(ParticleArrays::of(two), constraints, 0, 2, {}),
+               InvalidInput);
+  ParticleState one(1);
+  EXPECT_THROW(project_distance_constraints(ParticleArrays::of(one), constraints, 0, 1, {}),
+               InvalidInput);
+}
+
+}  // namespace
+}  // namespace tessera

@@ -1,0 +1,131 @@
+// Helpers for testing batched kernels against the scalar API.
+//
+// A batch test builds random constraints whose movable particles are all distinct (as inside
+// one colour), with some slots pointing at static particles shared between constraints, runs
+// the batched kernel on a range [begin, end) of random length, and compares every particle
+// with the scalar API applied constraint by constraint on a copy. It does so on every SIMD
+// target the machine can run.
+#pragma once
+
+#include <algorithm>
+#include <functional>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include <tessera/core/particle_state.hpp>
+#include <tessera/core/simd.hpp>
+
+#include "test_support.hpp"
+
+namespace tessera::test {
+
+/// Batch vs scalar tolerance of the batch tests (relative): the same formula, but FMA
+/// contraction and vector math functions round differently from the scalar build.
+inline constexpr Real kBatchTolerance = kDoublePrecision ? Real(1e-12) : Real(1e-5);
+
+/// Runs body(target) once per SIMD target this machine supports, with dispatch forced to that
+/// target, and restores the default afterwards.
+inline void for_each_simd_target(const std::function<void(const std::string&)>& body) {
+  for (const std::string& target : available_simd_targets()) {
+    force_simd_target(target);
+    SCOPED_TRACE("SIMD target " + target);
+    body(target);
+  }
+  force_simd_target("");
+}
+
+/// Random particles and constraint index tuples of N particles each, such that no movable
+/// particle appears in two constraints. With probability static_fraction a constraint has one
+/// slot on a static particle shared by many constraints, and each of its own particles is
+/// static. Particle numbering is a random permutation, so gathers are scattered over memory.
+template <int N>
+struct DisjointConstraintSet {
+  std::vector<Vector3r> positions;
+  std::vector<Real> inverse_masses;
+  std::vector<ParticleIndex> indices;  // N per constraint
+  std::size_t count = 0;
+
+  /// The particle positions of constraint c, slot by slot.
+  std::array<Vector3r, N> points(std::size_t c) const {
+    std::array<Vector3r, N> p;
+    for (int k = 0; k < N; ++k) p[k] = positions[indices[c * N + k]];
+    return p;
+  }
+};
+
+/// `make_points(random)` returns the N rest points of one well-conditioned constraint.
+template <int N, class MakePoints>
+DisjointConstraintSet<N> make_disjoint_constraints(Random& random, std::size_t count,
+                                                   Real static_fraction,
+                                                   MakePoints&& make_points) {
+  constexpr std::size_t kSharedStatic = 3;
+  DisjointConstraintSet<N> set;
+  set.count = count;
+  const std::size_t particle_count = count * N + kSharedStatic;
+  std::vector<ParticleIndex> permutation(particle_count);
+  std::iota(permutation.begin(), permutation.end(), ParticleIndex(0));
+  for (std::size_t i = particle_count - 1; i > 0; --i)
+    std::swap(permutation[i], permutation[std::size_t(random.integer(0, int(i)))]);
+  set.positions.assign(particle_count, Vector3r::Zero());
+  set.inverse_masses.assign(particle_count, Real(0));
+  for (std::size_t s = 0; s < kSharedStatic; ++s)
+    set.positions[permutation[count * N + s]] = random.vector(-10, 10);
+  for (std::size_t c = 0; c < count; ++c) {
+    std::array<Vector3r, N> points = make_points(random);
+    // Sometimes one slot is a static particle shared with other constraints: the constraint
+    // is translated so that slot's point lands on it (translation keeps it well-conditioned).
+    int shared_slot = -1;
+    ParticleIndex shared = 0;
+    if (random.uniform(0, 1) < static_fraction) {
+      shared_slot = random.integer(0, N - 1);
+      shared = permutation[count * N + std::size_t(random.integer(0, int(kSharedStatic) - 1))];
+      const Vector3r shift = set.positions[shared] - points[std::size_t(shared_slot)];
+      for (Vector3r& p : points) p += shift;
+    }
+    for (int k = 0; k < N; ++k) {
+      if (k == shared_slot) {
+        set.indices.push_back(shared);
+        continue;
+      }
+      const ParticleIndex index = permutation[c * N + std::size_t(k)];
+      set.inverse_masses[index] =
+          random.uniform(0, 1) < static_fraction ? Real(0) : random.inverse_mass();
+      set.positions[index] = points[std::size_t(k)];
+      set.indices.push_back(index);
+    }
+  }
+  return set;
+}
+
+/// A random sub-range [begin, end) of [0, count) whose length is not a multiple of lanes
+/// (unless count is too small for that).
+inline std::pair<std::size_t, std::size_t> random_range(Random& random, std::size_t count) {
+  const std::size_t begin = std::size_t(random.integer(0, int(count / 4)));
+  std::size_t end = std::size_t(random.integer(int(begin + count / 2), int(count)));
+  if ((end - begin) % kMaxLanes == 0 && end > begin + 1) --end;
+  return {begin, end};
+}
+
+/// Every particle of `state` equals the expected position within kBatchTolerance (relative to
+/// the scene scale `scale`).
+inline ::testing::AssertionResult positions_match(const ParticleState& state,
+                                                  const std::vector<Vector3r>& expected,
+                                                  Real scale = 1) {
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const Vector3r p = state.position(i);
+    if (!p.allFinite() ||
+        (p - expected[i]).norm() > kBatchTolerance * std::max({scale, expected[i].norm()}))
+      return ::testing::AssertionFailure()
+             << "particle " << i << ": batch " << p.transpose() << ", scalar "
+             << expected[i].transpose() << " (|diff| " << (p - expected[i]).norm() << ")";
+  }
+  return ::testing::AssertionSuccess();
+}
+
+/// Bitwise equality of two particle states' positions.
+inline bool same_bits(const ParticleState& a, const ParticleState& b) {
+  return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+
+}  // namespace tessera::test

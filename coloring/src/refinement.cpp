@@ -222,7 +222,9 @@ Colouring balance_colours(const ConstraintGraph& graph, const Colouring& colouri
             if (best == count || sizes[k] < sizes[best]) best = k;
           }
         }
-        if (best < count && sizes[best] + 1 < sizes[a]) {
+        // Only into colours below the mean: every move then removes excess for good, so the
+        // passes end after few sweeps instead of shuffling between two large colours.
+        if (best < count && sizes[best] < below && sizes[best] + 1 < sizes[a]) {
           move(graph, masks, colours, c, best);
           --sizes[a];
           ++sizes[best];

@@ -1,0 +1,1 @@
+// (being written: the edge_edge_distance batch kernel)

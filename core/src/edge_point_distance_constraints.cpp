@@ -1,0 +1,1 @@
+// (being written: the edge_point_distance batch kernel)

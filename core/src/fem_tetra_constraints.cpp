@@ -1,0 +1,1 @@
+// (being written: the fem_tetra batch kernel)

@@ -1,0 +1,1 @@
+// (being written: the isometric_bending batch kernel)

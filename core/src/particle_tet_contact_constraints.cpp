@@ -1,0 +1,1 @@
+// (being written: the particle_tet_contact batch kernel)

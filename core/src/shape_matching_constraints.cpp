@@ -1,0 +1,1 @@
+// (being written: the shape_matching batch kernel)

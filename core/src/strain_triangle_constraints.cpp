@@ -1,0 +1,1 @@
+// (being written: the strain_triangle batch kernel)

@@ -1,0 +1,1 @@
+// (being written: the triangle_point_distance batch kernel)

@@ -1,0 +1,2 @@
+// (being written)
+#include "batch_test_support.hpp"

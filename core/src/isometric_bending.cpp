@@ -1,8 +1,10 @@
 // Isometric bending (Bergou, Wardetzky, Harmon, Zorin, Grinspun 2006): for nearly
 // inextensible surfaces the bending energy of a two-triangle stencil is a constant quadratic
 // form in the positions, C = ½ Σ_ij Q_ij p_i · p_j, so Q is computed once from the rest shape
-// and each projection is a matrix–vector product. This file holds that one formula, the
-// construction of Q and the PBD and XPBD projections.
+// and each projection is a matrix–vector product. This file builds Q from the rest shape
+// (plain Eigen: set-up, not the hot path; the batch builder calls the same function) and runs
+// the scalar API as one lane of the family's formula (kernels/isometric_bending-inl.h), the
+// code the batched kernel runs on W lanes.
 //
 // Q = 3 / (A0 + A1) · K Kᵀ, where K is the cotangent-weighted Laplacian row of the stencil.
 // With the shared edge p2-p3, wing p0 in triangle (p0, p2, p3), wing p1 in (p1, p3, p2), and
@@ -11,14 +13,12 @@
 //   K_{p2} =   cot_{3,0} + cot_{3,1},    K_{p3} =   cot_{2,0} + cot_{2,1}.
 // Σ K = 0 and Σ K_i p_i = 0 for any planar stencil (the discrete mean curvature vanishes), so
 // C = 0 exactly when the stencil is flat.
-#include <array>
-
 #include <Eigen/Geometry>
 
 #include <tessera/core/position_based_dynamics.hpp>
 #include <tessera/core/xpbd.hpp>
 
-#include "projection.hpp"
+#include "kernels/isometric_bending-inl.h"
 
 namespace tessera {
 namespace {
@@ -50,25 +50,25 @@ bool build_bending_matrix(const Vector3r& p0, const Vector3r& p1, const Vector3r
   return true;
 }
 
-/// C = ½ Σ_ij Q_ij p_i · p_j and ∇_{pi} C = Σ_j Q_ij p_j. The rows of Q sum to zero, so the
-/// positions are taken relative to their centroid first: the same values, without the
-/// cancellation that far-from-origin coordinates would cause. Returns false when the gradient
-/// vanishes (a flat stencil: the constraint is satisfied and there is no direction to move).
-bool evaluate_bending(const std::array<const Vector3r*, 4>& p, const Matrix4r& Q, Real& C,
-                      detail::Gradients<4>& grad) {
-  const Vector3r centroid = Real(0.25) * (*p[0] + *p[1] + *p[2] + *p[3]);
-  std::array<Vector3r, 4> relative;
-  for (int i = 0; i < 4; ++i) relative[i] = *p[i] - centroid;
-  Real gradient_norm_squared = 0;
-  C = 0;
-  for (int i = 0; i < 4; ++i) {
-    grad[i].setZero();
-    for (int j = 0; j < 4; ++j) grad[i] += Q(i, j) * relative[j];
-    C += relative[i].dot(grad[i]);
-    gradient_norm_squared += grad[i].squaredNorm();
-  }
-  C *= Real(0.5);
-  return gradient_norm_squared > kDegenerateTolerance * kDegenerateTolerance;
+namespace lanes = HWY_NAMESPACE;
+
+lanes::ConstraintValue<Real, 4> evaluate(const Vector3r& p0, const Vector3r& p1,
+                                         const Vector3r& p2, const Vector3r& p3,
+                                         const Matrix4r& Q) {
+  const lanes::Vec3<Real> p[4] = {lanes::from_eigen(p0), lanes::from_eigen(p1),
+                                  lanes::from_eigen(p2), lanes::from_eigen(p3)};
+  Real q[4][4];
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) q[i][j] = Q(i, j);
+  return lanes::isometric_bending_constraint<Real>(p, q);
+}
+
+void write_corrections(const lanes::Vec3<Real> (&corr)[4], Vector3r& corr0, Vector3r& corr1,
+                       Vector3r& corr2, Vector3r& corr3) {
+  corr0 = lanes::to_eigen(corr[0]);
+  corr1 = lanes::to_eigen(corr[1]);
+  corr2 = lanes::to_eigen(corr[2]);
+  corr3 = lanes::to_eigen(corr[3]);
 }
 
 }  // namespace
@@ -84,15 +84,12 @@ bool PositionBasedDynamics::solve_IsometricBendingConstraint(
     const Vector3r& p0, Real invMass0, const Vector3r& p1, Real invMass1, const Vector3r& p2,
     Real invMass2, const Vector3r& p3, Real invMass3, const Matrix4r& Q, const Real stiffness,
     Vector3r& corr0, Vector3r& corr1, Vector3r& corr2, Vector3r& corr3) {
-  Vector3r* const corr[4] = {&corr0, &corr1, &corr2, &corr3};
-  Real C = 0;
-  detail::Gradients<4> grad;
-  if (!evaluate_bending({&p0, &p1, &p2, &p3}, Q, C, grad)) {
-    detail::zero_corrections<4>(corr);
-    return true;  // flat: satisfied
-  }
-  return detail::project_pbd<4>(C, grad, {invMass0, invMass1, invMass2, invMass3}, stiffness,
-                                corr);
+  const auto value = evaluate(p0, p1, p2, p3, Q);
+  const Real w[4] = {invMass0, invMass1, invMass2, invMass3};
+  lanes::Vec3<Real> corr[4];
+  const bool projected = lanes::project_pbd(value, w, stiffness, corr);
+  write_corrections(corr, corr0, corr1, corr2, corr3);
+  return projected || lanes::bending_is_flat(value);  // flat: satisfied
 }
 
 bool XPBD::init_IsometricBendingConstraint(const Vector3r& p0, const Vector3r& p1,
@@ -108,19 +105,13 @@ bool XPBD::solve_IsometricBendingConstraint(const Vector3r& p0, Real invMass0,
                                             const Matrix4r& Q, const Real compliance,
                                             const Real dt, Real& lambda, Vector3r& corr0,
                                             Vector3r& corr1, Vector3r& corr2, Vector3r& corr3) {
-  Vector3r* const corr[4] = {&corr0, &corr1, &corr2, &corr3};
-  if (!(dt > 0) || !(compliance >= 0)) {
-    detail::zero_corrections<4>(corr);
-    return false;
-  }
-  Real C = 0;
-  detail::Gradients<4> grad;
-  if (!evaluate_bending({&p0, &p1, &p2, &p3}, Q, C, grad)) {
-    detail::zero_corrections<4>(corr);
-    return true;  // flat: satisfied, λ unchanged
-  }
-  return detail::project_xpbd<4>(C, grad, {invMass0, invMass1, invMass2, invMass3}, compliance,
-                                 dt, lambda, corr);
+  const auto value = evaluate(p0, p1, p2, p3, Q);
+  const Real w[4] = {invMass0, invMass1, invMass2, invMass3};
+  lanes::Vec3<Real> corr[4];
+  const bool projected = lanes::project_xpbd(value, w, compliance, dt, lambda, corr);
+  write_corrections(corr, corr0, corr1, corr2, corr3);
+  // Flat: satisfied, λ unchanged (but a bad time step or compliance is still an error).
+  return projected || (lanes::bending_is_flat(value) && dt > 0 && compliance >= 0);
 }
 
 }  // namespace tessera

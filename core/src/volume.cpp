@@ -1,32 +1,30 @@
-// Tetrahedron volume constraint C = V(p0..p3) - V0 with the signed volume
-// V = (1/6) ((p1 - p0) × (p2 - p0)) · (p3 - p0): the one formula of the family and its PBD and
-// XPBD projections. Keeps soft bodies from collapsing; the sign lets it also un-invert a
-// tetrahedron.
-#include <Eigen/Geometry>
-
+// The scalar API of the tetrahedron volume constraint (C = V - V0, V the signed volume): one
+// lane of the family's formula (kernels/volume-inl.h), the same code the batched kernel runs
+// on W lanes, with its PBD and XPBD projections.
 #include <tessera/core/position_based_dynamics.hpp>
 #include <tessera/core/xpbd.hpp>
 
-#include "projection.hpp"
+#include "kernels/volume-inl.h"
 
 namespace tessera {
 namespace {
 
-/// C and ∇C of the volume constraint. Each ∇_{pi} C is the area-weighted normal of the face
-/// opposite p_i (over 3), pointing away from p_i's opposite face when V > 0. Always defined;
-/// a degenerate tetrahedron (every point on one line) shows up as a vanishing gradient, which
-/// the projection rejects.
-void evaluate_volume(const Vector3r& p0, const Vector3r& p1, const Vector3r& p2,
-                     const Vector3r& p3, Real rest_volume, Real& C, detail::Gradients<4>& grad) {
-  const Vector3r e1 = p1 - p0;
-  const Vector3r e2 = p2 - p0;
-  const Vector3r e3 = p3 - p0;
-  constexpr Real kSixth = Real(1) / Real(6);
-  grad[1] = kSixth * e2.cross(e3);
-  grad[2] = kSixth * e3.cross(e1);
-  grad[3] = kSixth * e1.cross(e2);
-  grad[0] = -(grad[1] + grad[2] + grad[3]);
-  C = grad[3].dot(e3) - rest_volume;
+namespace lanes = HWY_NAMESPACE;
+
+lanes::ConstraintValue<Real, 4> evaluate(const Vector3r& p0, const Vector3r& p1,
+                                         const Vector3r& p2, const Vector3r& p3,
+                                         Real rest_volume) {
+  return lanes::volume_constraint<Real>(lanes::from_eigen(p0), lanes::from_eigen(p1),
+                                        lanes::from_eigen(p2), lanes::from_eigen(p3),
+                                        rest_volume);
+}
+
+void write_corrections(const lanes::Vec3<Real> (&corr)[4], Vector3r& corr0, Vector3r& corr1,
+                       Vector3r& corr2, Vector3r& corr3) {
+  corr0 = lanes::to_eigen(corr[0]);
+  corr1 = lanes::to_eigen(corr[1]);
+  corr2 = lanes::to_eigen(corr[2]);
+  corr3 = lanes::to_eigen(corr[3]);
 }
 
 }  // namespace
@@ -35,12 +33,12 @@ bool PositionBasedDynamics::solve_VolumeConstraint(
     const Vector3r& p0, Real invMass0, const Vector3r& p1, Real invMass1, const Vector3r& p2,
     Real invMass2, const Vector3r& p3, Real invMass3, const Real restVolume,
     const Real stiffness, Vector3r& corr0, Vector3r& corr1, Vector3r& corr2, Vector3r& corr3) {
-  Vector3r* const corr[4] = {&corr0, &corr1, &corr2, &corr3};
-  Real C = 0;
-  detail::Gradients<4> grad;
-  evaluate_volume(p0, p1, p2, p3, restVolume, C, grad);
-  return detail::project_pbd<4>(C, grad, {invMass0, invMass1, invMass2, invMass3}, stiffness,
-                                corr);
+  const auto value = evaluate(p0, p1, p2, p3, restVolume);
+  const Real w[4] = {invMass0, invMass1, invMass2, invMass3};
+  lanes::Vec3<Real> corr[4];
+  const bool projected = lanes::project_pbd(value, w, stiffness, corr);
+  write_corrections(corr, corr0, corr1, corr2, corr3);
+  return projected;
 }
 
 bool XPBD::solve_VolumeConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
@@ -49,12 +47,12 @@ bool XPBD::solve_VolumeConstraint(const Vector3r& p0, Real invMass0, const Vecto
                                   const Real compliance, const Real dt, Real& lambda,
                                   Vector3r& corr0, Vector3r& corr1, Vector3r& corr2,
                                   Vector3r& corr3) {
-  Vector3r* const corr[4] = {&corr0, &corr1, &corr2, &corr3};
-  Real C = 0;
-  detail::Gradients<4> grad;
-  evaluate_volume(p0, p1, p2, p3, restVolume, C, grad);
-  return detail::project_xpbd<4>(C, grad, {invMass0, invMass1, invMass2, invMass3}, compliance,
-                                 dt, lambda, corr);
+  const auto value = evaluate(p0, p1, p2, p3, restVolume);
+  const Real w[4] = {invMass0, invMass1, invMass2, invMass3};
+  lanes::Vec3<Real> corr[4];
+  const bool projected = lanes::project_xpbd(value, w, compliance, dt, lambda, corr);
+  write_corrections(corr, corr0, corr1, corr2, corr3);
+  return projected;
 }
 
 }  // namespace tessera

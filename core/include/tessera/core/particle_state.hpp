@@ -14,13 +14,11 @@
 #include <span>
 
 #include <tessera/core/aligned_vector.hpp>
+#include <tessera/core/indices.hpp>
 #include <tessera/core/real.hpp>
 #include <tessera/core/simd.hpp>
 
 namespace tessera {
-
-/// Index of a particle in a ParticleState (and of a vertex in a mesh).
-using ParticleIndex = std::uint32_t;
 
 class ParticleState {
  public:

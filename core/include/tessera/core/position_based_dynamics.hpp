@@ -10,10 +10,13 @@
 //    where w_i is the inverse mass and k ∈ [0, 1] the stiffness. With k = 1 this is one
 //    Newton step on C along the inverse-mass-weighted gradient.
 //  * A particle with inverse mass 0 is static: its correction is exactly zero.
-//  * Degenerate input (coincident points, zero-length edge, zero-area triangle, flat
-//    tetrahedron, every particle static, Σ_j w_j |∇_j C|² below kDegenerateTolerance) makes the
-//    function return false with every correction set to zero. No function turns finite input
-//    into NaN or Inf.
+//  * Degenerate input (coincident points, zero-length edge, zero-area triangle, a flat
+//    tetrahedron for the strain and FEM families, every particle static, Σ_j w_j |∇_j C|²
+//    below kDegenerateTolerance²) makes the function return false with every correction set
+//    to zero. Exceptions, documented at the function: the volume constraint inflates a flat
+//    tetrahedron that still has a proper face, and a satisfied constraint whose gradient
+//    vanishes there (isometric bending of a flat stencil, FEM at rest) returns true with zero
+//    corrections. No function turns finite input into NaN or Inf.
 //  * Return value: true when corrections were computed (they may be zero because the
 //    constraint is satisfied), false when the configuration is degenerate or the constraint is
 //    inactive. Every output correction is written on every call, also when false is returned.

@@ -1,1 +1,90 @@
-// (being written: the dihedral batch kernel)
+// Dihedral constraints in SoA batches: validation at the door (rest angles measured with the
+// family's own formula), then the batched kernel, compiled once per SIMD target (Highway
+// foreach_target) and dispatched at run time.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "dihedral_constraints.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+#include <tessera/core/dihedral_constraints.hpp>
+
+#include "kernels/batch_loop-inl.h"
+#include "kernels/dihedral-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace tessera {
+namespace HWY_NAMESPACE {
+
+void ProjectDihedralConstraints(ParticleArrays particles, DihedralConstraints& constraints,
+                                std::size_t begin, std::size_t end,
+                                ProjectionSettings settings) {
+  const RealTag d;
+  const Real* rest_angle = constraints.rest_angle.data();
+  project_constraint_lanes<4>(
+      particles, constraints.particles,
+      {constraints.stiffness.data(), constraints.compliance.data(), constraints.lambda.data()},
+      begin, end, settings, [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
+        return dihedral_constraint(p[0], p[1], p[2], p[3], hn::LoadU(d, rest_angle + i));
+      });
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace tessera
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include "constraint_validation.hpp"
+
+namespace tessera {
+
+HWY_EXPORT(ProjectDihedralConstraints);
+
+DihedralConstraints make_dihedral_constraints(const DihedralConstraintInput& input) {
+  namespace lanes = HWY_NAMESPACE;
+  const detail::ConstraintValidator validator(DihedralConstraints::kFamily,
+                                              input.rest_positions.size());
+  validator.check_parameter("stiffness", input.stiffness);
+  validator.check_parameter("compliance", input.compliance);
+  DihedralConstraints result;
+  result.particles = validator.particles<4>(input.particles);
+  const std::size_t n = result.size();
+  result.rest_angle = detail::filled(n, 0);
+  const Real tolerance_squared = kDegenerateTolerance * kDegenerateTolerance;
+  for (std::size_t c = 0; c < n; ++c) {
+    Vector3r p[4];
+    for (std::size_t k = 0; k < 4; ++k) {
+      p[k] = input.rest_positions[result.particles.particle[k][c]];
+      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
+    }
+    // The constraint's own degenerate cases, named.
+    if (!((p[3] - p[2]).squaredNorm() > tolerance_squared))
+      validator.fail(c, "degenerate rest stencil: shared edge p2-p3 has zero length");
+    if (!((p[2] - p[0]).cross(p[3] - p[0]).squaredNorm() > tolerance_squared))
+      validator.fail(c, "degenerate rest stencil: triangle (p0, p2, p3) has zero area");
+    if (!((p[3] - p[1]).cross(p[2] - p[1]).squaredNorm() > tolerance_squared))
+      validator.fail(c, "degenerate rest stencil: triangle (p1, p3, p2) has zero area");
+    // φ0 is C at rest for φ0 = 0, evaluated by the formula every projection uses.
+    const auto at_rest = lanes::dihedral_constraint<Real>(
+        lanes::from_eigen(p[0]), lanes::from_eigen(p[1]), lanes::from_eigen(p[2]),
+        lanes::from_eigen(p[3]), Real(0));
+    if (!at_rest.valid || !std::isfinite(at_rest.C))
+      validator.fail(c, "degenerate rest stencil: the rest angle is undefined");
+    result.rest_angle[c] = at_rest.C;
+  }
+  result.stiffness = detail::filled(n, input.stiffness);
+  result.compliance = detail::filled(n, input.compliance);
+  result.lambda = detail::filled(n, 0);
+  return result;
+}
+
+void project_dihedral_constraints(ParticleArrays particles, DihedralConstraints& constraints,
+                                  std::size_t begin, std::size_t end,
+                                  const ProjectionSettings& settings) {
+  check_projection_range(DihedralConstraints::kFamily, begin, end, constraints.size(),
+                         constraints.particles.particle_count, particles);
+  HWY_DYNAMIC_DISPATCH(ProjectDihedralConstraints)(particles, constraints, begin, end, settings);
+}
+
+}  // namespace tessera
+#endif  // HWY_ONCE

@@ -1,1 +1,95 @@
-// (being written: the volume batch kernel)
+// Volume constraints in SoA batches: validation at the door (signed rest volumes, flat rest
+// tetrahedra rejected), then the batched kernel, compiled once per SIMD target (Highway
+// foreach_target) and dispatched at run time.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "volume_constraints.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+#include <tessera/core/volume_constraints.hpp>
+
+#include "kernels/batch_loop-inl.h"
+#include "kernels/volume-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace tessera {
+namespace HWY_NAMESPACE {
+
+void ProjectVolumeConstraints(ParticleArrays particles, VolumeConstraints& constraints,
+                              std::size_t begin, std::size_t end, ProjectionSettings settings) {
+  const RealTag d;
+  const Real* rest_volume = constraints.rest_volume.data();
+  project_constraint_lanes<4>(
+      particles, constraints.particles,
+      {constraints.stiffness.data(), constraints.compliance.data(), constraints.lambda.data()},
+      begin, end, settings, [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
+        return volume_constraint(p[0], p[1], p[2], p[3], hn::LoadU(d, rest_volume + i));
+      });
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace tessera
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "constraint_validation.hpp"
+
+namespace tessera {
+
+HWY_EXPORT(ProjectVolumeConstraints);
+
+VolumeConstraints make_volume_constraints(const VolumeConstraintInput& input) {
+  namespace lanes = HWY_NAMESPACE;
+  const detail::ConstraintValidator validator(VolumeConstraints::kFamily,
+                                              input.rest_positions.size());
+  validator.check_parameter("stiffness", input.stiffness);
+  validator.check_parameter("compliance", input.compliance);
+  VolumeConstraints result;
+  result.particles = validator.particles<4>(input.particles);
+  const std::size_t n = result.size();
+  result.rest_volume = detail::filled(n, 0);
+  for (std::size_t c = 0; c < n; ++c) {
+    Vector3r p[4];
+    for (std::size_t k = 0; k < 4; ++k) {
+      p[k] = input.rest_positions[result.particles.particle[k][c]];
+      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
+    }
+    // V0 is C at rest for V0 = 0, evaluated by the formula every projection uses.
+    const Real volume = lanes::volume_constraint<Real>(
+                            lanes::from_eigen(p[0]), lanes::from_eigen(p[1]),
+                            lanes::from_eigen(p[2]), lanes::from_eigen(p[3]), Real(0))
+                            .C;
+    // Flat is judged relative to the tetrahedron's size, so it means the same at any scale.
+    Real longest_edge = 0;
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) longest_edge = std::max(longest_edge, (p[a] - p[b]).norm());
+    if (!std::isfinite(volume) ||
+        !(6 * std::abs(volume) >
+          kDegenerateTolerance * longest_edge * longest_edge * longest_edge)) {
+      std::ostringstream problem;
+      problem << "rest volume is " << volume << " (flat tetrahedron)";
+      validator.fail(c, problem.str());
+    }
+    result.rest_volume[c] = volume;
+  }
+  result.stiffness = detail::filled(n, input.stiffness);
+  result.compliance = detail::filled(n, input.compliance);
+  result.lambda = detail::filled(n, 0);
+  return result;
+}
+
+void project_volume_constraints(ParticleArrays particles, VolumeConstraints& constraints,
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
+  check_projection_range(VolumeConstraints::kFamily, begin, end, constraints.size(),
+                         constraints.particles.particle_count, particles);
+  HWY_DYNAMIC_DISPATCH(ProjectVolumeConstraints)(particles, constraints, begin, end, settings);
+}
+
+}  // namespace tessera
+#endif  // HWY_ONCE

@@ -1,1 +1,132 @@
-// (being written: the strain_tetra batch kernel)
+// Strain tetrahedron constraints in SoA batches: validation at the door (the rest inverse comes
+// from the scalar API's init), then the batched kernel — one lane formula, kernels/strain-inl.h
+// — compiled once per SIMD target (Highway foreach_target) and dispatched at run time.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "strain_tetra_constraints.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+#include <tessera/core/strain_tetra_constraints.hpp>
+
+#include "kernels/batch-inl.h"
+#include "kernels/strain-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace tessera {
+namespace HWY_NAMESPACE {
+
+template <bool kNormalizeStretch, bool kNormalizeShear>
+HWY_NOINLINE void project_strain_tetra_lanes(ParticleArrays particles,
+                                                const StrainTetraConstraints& constraints,
+                                                std::size_t begin, std::size_t end) {
+  const RealTag d;
+  const std::size_t lanes = hn::Lanes(d);
+  const ParticleIndex* slot[4];
+  for (int k = 0; k < 4; ++k) slot[k] = constraints.particles.particle[std::size_t(k)].data();
+  const Real* stiffness_array[6];
+  for (int s = 0; s < 3; ++s) {
+    stiffness_array[s] = constraints.stretch_stiffness[std::size_t(s)].data();
+    stiffness_array[s + 3] = constraints.shear_stiffness[std::size_t(s)].data();
+  }
+  for (std::size_t i = begin; i < end; i += lanes) {
+    const LaneMask active = hn::FirstN(d, end - i);
+    ParticleLanes gathered[4];
+    Vec3<RealLanes> p[4];
+    RealLanes w[4];
+    for (int k = 0; k < 4; ++k) {
+      gathered[k] = gather_particles(particles, slot[k] + i);
+      p[k] = gathered[k].position;
+      w[k] = gathered[k].inverse_mass;
+    }
+    RealLanes m[3][3];
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j)
+        m[k][j] = hn::LoadU(d, constraints.rest_inverse[std::size_t(3 * k + j)].data() + i);
+    RealLanes stiffness[6];
+    for (int s = 0; s < 6; ++s) stiffness[s] = hn::LoadU(d, stiffness_array[s] + i);
+    Vec3<RealLanes> corr[4];
+    project_strain<3>(p, w, m, kStrainTetraEntries, stiffness, kNormalizeStretch,
+                      kNormalizeShear, corr);
+    for (int k = 0; k < 4; ++k)
+      scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
+  }
+}
+
+void ProjectStrainTetraConstraints(ParticleArrays particles,
+                                      StrainTetraConstraints& constraints, std::size_t begin,
+                                      std::size_t end) {
+  if (constraints.normalize_stretch) {
+    if (constraints.normalize_shear)
+      project_strain_tetra_lanes<true, true>(particles, constraints, begin, end);
+    else
+      project_strain_tetra_lanes<true, false>(particles, constraints, begin, end);
+  } else {
+    if (constraints.normalize_shear)
+      project_strain_tetra_lanes<false, true>(particles, constraints, begin, end);
+    else
+      project_strain_tetra_lanes<false, false>(particles, constraints, begin, end);
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace tessera
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include <tessera/core/position_based_dynamics.hpp>
+
+#include "constraint_validation.hpp"
+
+namespace tessera {
+
+HWY_EXPORT(ProjectStrainTetraConstraints);
+
+StrainTetraConstraints make_strain_tetra_constraints(const StrainTetraConstraintInput& input) {
+  const detail::ConstraintValidator validator(StrainTetraConstraints::kFamily,
+                                              input.rest_positions.size());
+  const char* stretch_names[3] = {"xx stretch stiffness", "yy stretch stiffness",
+                                  "zz stretch stiffness"};
+  const char* shear_names[3] = {"xy shear stiffness", "xz shear stiffness",
+                                "yz shear stiffness"};
+  for (int s = 0; s < 3; ++s) {
+    validator.check_parameter(stretch_names[s], input.stretch_stiffness[s]);
+    validator.check_parameter(shear_names[s], input.shear_stiffness[s]);
+  }
+  StrainTetraConstraints result;
+  result.particles = validator.particles<4>(input.particles);
+  const std::size_t n = result.size();
+  for (auto& entry : result.rest_inverse) entry = detail::filled(n, 0);
+  for (std::size_t c = 0; c < n; ++c) {
+    Vector3r p[4];
+    for (int k = 0; k < 4; ++k) {
+      p[k] = input.rest_positions[result.particles.particle[std::size_t(k)][c]];
+      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
+    }
+    Matrix3r rest_inverse;
+    if (!PositionBasedDynamics::init_StrainTetraConstraint(p[0], p[1], p[2], p[3],
+                                                           rest_inverse))
+      validator.fail(c, "rest tetrahedron is flat (zero volume)");
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j) result.rest_inverse[std::size_t(3 * k + j)][c] = rest_inverse(k, j);
+  }
+  for (int s = 0; s < 3; ++s) {
+    result.stretch_stiffness[std::size_t(s)] = detail::filled(n, input.stretch_stiffness[s]);
+    result.shear_stiffness[std::size_t(s)] = detail::filled(n, input.shear_stiffness[s]);
+  }
+  result.normalize_stretch = input.normalize_stretch;
+  result.normalize_shear = input.normalize_shear;
+  return result;
+}
+
+void project_strain_tetra_constraints(ParticleArrays particles,
+                                         StrainTetraConstraints& constraints,
+                                         std::size_t begin, std::size_t end,
+                                         const ProjectionSettings& /*settings*/) {
+  check_projection_range(StrainTetraConstraints::kFamily, begin, end, constraints.size(),
+                         constraints.particles.particle_count, particles);
+  HWY_DYNAMIC_DISPATCH(ProjectStrainTetraConstraints)(particles, constraints, begin, end);
+}
+
+}  // namespace tessera
+#endif  // HWY_ONCE

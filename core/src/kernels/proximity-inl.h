@@ -22,8 +22,9 @@
 // Degenerate primitives, as the scalar API documents them: a zero-length segment is its first
 // point (t = 0, s = 0); a triangle of zero area, or so thin that
 // |(p1 - p0) × (p2 - p0)|² ≤ kDegenerateTolerance |p1 - p0|² |p2 - p0|², is measured to its
-// three edges (as is a lane whose face coordinates come out inconsistent by round-off); for
-// parallel segments the closest pair starting from s = 0 is used.
+// edges, whose union is its longest edge (exactly so at zero area; within the sliver's width,
+// at most sqrt(kDegenerateTolerance) times its edges, for a thin one); for parallel segments
+// the closest pair starting from s = 0 is used.
 #if defined(TESSERA_CORE_KERNELS_PROXIMITY_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef TESSERA_CORE_KERNELS_PROXIMITY_INL_H_
 #undef TESSERA_CORE_KERNELS_PROXIMITY_INL_H_
@@ -81,33 +82,36 @@ HWY_INLINE Vec3<V> triangle_point_at(const TriangleBarycentric<V>& bary, const V
   return a * bary.b0 + b * bary.b1 + c * bary.b2;
 }
 
-/// The closest point to p on the three edges of triangle (a, b, c): the first of ab, bc, ca
-/// with the smallest distance.
+/// The closest point to p of a triangle of zero area, which is its longest edge (the union of
+/// its three edges). Why the longest edge and not the nearest of three: on a collinear
+/// triangle the edges overlap, so two edges reach the same point with different barycentric
+/// coordinates and a distance comparison would pick between them by round-off; the longest
+/// edge gives the same point in every lane whatever the rounding (FMA or not). Equal lengths
+/// go to the first of ab, bc, ca.
 template <class V>
-HWY_INLINE TriangleBarycentric<V> closest_triangle_edge_barycentric(const Vec3<V>& p,
+HWY_INLINE TriangleBarycentric<V> closest_triangle_hull_barycentric(const Vec3<V>& p,
                                                                     const Vec3<V>& a,
                                                                     const Vec3<V>& b,
                                                                     const Vec3<V>& c) {
   const V one = splat<V>(1.0), z = zero<V>();
-  const V t_ab = closest_segment_parameter(p, a, b);
-  const V t_bc = closest_segment_parameter(p, b, c);
-  const V t_ca = closest_segment_parameter(p, c, a);
-  const TriangleBarycentric<V> on_ab{one - t_ab, t_ab, z};
-  const TriangleBarycentric<V> on_bc{z, one - t_bc, t_bc};
-  const TriangleBarycentric<V> on_ca{t_ca, z, one - t_ca};
-  TriangleBarycentric<V> best = on_ab;
-  V best_distance = squared_norm(p - triangle_point_at(on_ab, a, b, c));
-  const V distance_bc = squared_norm(p - triangle_point_at(on_bc, a, b, c));
-  const auto bc_closer = distance_bc < best_distance;
-  best = select(bc_closer, on_bc, best);
-  best_distance = select(bc_closer, distance_bc, best_distance);
-  const V distance_ca = squared_norm(p - triangle_point_at(on_ca, a, b, c));
-  return select(distance_ca < best_distance, on_ca, best);
+  const V length_ab = squared_norm(b - a);
+  const V length_bc = squared_norm(c - b);
+  const V length_ca = squared_norm(a - c);
+  const auto bc_longest = length_bc > length_ab;
+  const auto ca_longest = length_ca > lane_max(length_ab, length_bc);
+  const Vec3<V> start = select(ca_longest, c, select(bc_longest, b, a));
+  const Vec3<V> end = select(ca_longest, a, select(bc_longest, c, b));
+  const V t = closest_segment_parameter(p, start, end);
+  TriangleBarycentric<V> result{one - t, t, z};
+  result = select(bc_longest, TriangleBarycentric<V>{z, one - t, t}, result);
+  return select(ca_longest, TriangleBarycentric<V>{t, z, one - t}, result);
 }
 
 /// Barycentric coordinates of the point of triangle (a, b, c) closest to p. Every Voronoi
 /// region's candidate is evaluated and the first region (in the order vertex a, vertex b,
-/// edge ab, vertex c, edge ac, edge bc, face) whose test holds is selected.
+/// edge ab, vertex c, edge ac, edge bc, face) whose test holds is selected. A triangle of
+/// zero area or too thin for face coordinates is measured to its longest edge; in the face
+/// region, coordinates that round-off made slightly negative are clamped to 0.
 template <class V>
 HWY_INLINE TriangleBarycentric<V> closest_triangle_barycentric(const Vec3<V>& p, const Vec3<V>& a,
                                                                const Vec3<V>& b, const Vec3<V>& c) {
@@ -143,10 +147,13 @@ HWY_INLINE TriangleBarycentric<V> closest_triangle_barycentric(const Vec3<V>& p,
   const V t_ac = safe_divide(d2, ac_denominator, ac_denominator > z);
   const V bc_denominator = bc_from_b + bc_from_c;
   const V t_bc = safe_divide(bc_from_b, bc_denominator, bc_denominator > z);
-  const V sum = va + vb + vc;
-  const auto face_consistent = mask_and(mask_and(va >= z, vb >= z), mask_and(vc >= z, sum > z));
-  const V inverse_sum = safe_divide(one, sum, face_consistent);
-  const V v = vb * inverse_sum, w = vc * inverse_sum;
+  // Face: va, vb, vc are the scaled barycentric coordinates of p's projection, positive
+  // unless round-off says otherwise next to an edge.
+  const V face_a = lane_max(va, z), face_b = lane_max(vb, z), face_c = lane_max(vc, z);
+  const V sum = face_a + face_b + face_c;
+  const auto face_defined = sum > z;
+  const V inverse_sum = safe_divide(one, sum, face_defined);
+  const V v = face_b * inverse_sum, w = face_c * inverse_sum;
 
   // Lowest priority first, so the first region that holds wins.
   TriangleBarycentric<V> result{one - v - w, v, w};
@@ -159,8 +166,8 @@ HWY_INLINE TriangleBarycentric<V> closest_triangle_barycentric(const Vec3<V>& p,
 
   const auto in_face =
       mask_not(mask_or(mask_or(mask_or(at_a, at_b), mask_or(on_ab, at_c)), mask_or(on_ac, on_bc)));
-  const auto use_edges = mask_or(mask_not(proper), mask_and(in_face, mask_not(face_consistent)));
-  return select(use_edges, closest_triangle_edge_barycentric(p, a, b, c), result);
+  const auto use_hull = mask_or(mask_not(proper), mask_and(in_face, mask_not(face_defined)));
+  return select(use_hull, closest_triangle_hull_barycentric(p, a, b, c), result);
 }
 
 /// Parameters (s, t) ∈ [0, 1]² of the closest points p0 + s (p1 - p0), p2 + t (p3 - p2).

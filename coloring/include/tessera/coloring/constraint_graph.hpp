@@ -18,14 +18,13 @@
 #include <string>
 #include <vector>
 
+#include <tessera/core/indices.hpp>
 #include <tessera/core/real.hpp>
 
 namespace tessera {
 
-/// Index of a particle, as the constraint groups name them.
-using ParticleIndex = std::uint32_t;
-/// Global index of a constraint: the groups' constraints concatenated in group order.
-using ConstraintIndex = std::uint32_t;
+// ParticleIndex (a particle as the constraint groups name it) and ConstraintIndex (a global
+// constraint id: the groups' constraints concatenated in group order) come from core.
 
 /// A named view of one family's particle indices. It does not own the indices; they must
 /// outlive the ConstraintGraph's construction (the graph copies what it needs).

@@ -12,12 +12,14 @@
 #include <cstdint>
 #include <vector>
 
+#include <tessera/core/indices.hpp>
 #include <tessera/core/real.hpp>
 
 namespace tessera::io {
 
-/// Particle (vertex) index as stored in the generated index arrays.
-using VertexIndex = std::uint32_t;
+/// Particle (vertex) index as stored in the generated index arrays: a mesh vertex is a
+/// particle, so this is core's ParticleIndex under the mesh's name.
+using VertexIndex = tessera::ParticleIndex;
 
 /// How each grid square of a cloth is split into two triangles.
 enum class DiagonalPattern {

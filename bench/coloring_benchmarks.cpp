@@ -133,8 +133,9 @@ void graph_build_benchmark(benchmark::State& state, std::string mesh_name) {
 }
 
 void register_all() {
-  const std::vector<std::string> strategies = {"greedy", "largest-first", "smallest-last", "dsatur",
-                                               "iterated-greedy", "random", "metis"};
+  const std::vector<std::string> strategies = {"greedy",  "largest-first",   "smallest-last",
+                                               "dsatur",  "stencil",         "iterated-greedy",
+                                               "random",  "metis"};
   for (const std::string& m : kMeshes) {
     benchmark::RegisterBenchmark(("graph/build/" + m).c_str(), graph_build_benchmark, m)
         ->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -121,6 +121,12 @@ std::vector<ConstraintIndex> largest_first_order(const ConstraintGraph& graph);
 /// Matula–Beck smallest-last colouring order (reverse of the min-weight removal order).
 std::vector<ConstraintIndex> smallest_last_order(const ConstraintGraph& graph);
 
+/// Stencil order: constraints grouped by the shape of their particle stencil (the offsets of
+/// their sorted movable particle ids from the smallest), largest shape classes first, each
+/// class by its smallest particle. Independent of the input order of the constraints. See
+/// sequential_strategies.cpp for why this colours regular meshes at their lower bound.
+std::vector<ConstraintIndex> stencil_order(const ConstraintGraph& graph);
+
 /// Renumbers colours so they are dense (unused colours removed, order kept); returns the count.
 std::size_t compact_colours(std::span<Colour> colours);
 

@@ -13,6 +13,7 @@ ColouringRegistry ColouringRegistry::with_builtin_strategies() {
   registry.add(make_largest_first_strategy());
   registry.add(make_smallest_last_strategy());
   registry.add(make_dsatur_strategy());
+  registry.add(make_stencil_strategy());
   registry.add(make_iterated_greedy_strategy());
   registry.add(make_random_strategy());
   registry.add(make_metis_strategy());

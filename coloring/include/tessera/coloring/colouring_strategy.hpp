@@ -50,7 +50,7 @@ class ColouringRegistry {
   /// An empty registry.
   ColouringRegistry() = default;
   /// A registry holding Tessera's built-in strategies: greedy, largest-first, smallest-last,
-  /// dsatur, iterated-greedy, random, metis.
+  /// dsatur, stencil, iterated-greedy, random, metis.
   static ColouringRegistry with_builtin_strategies();
 
   /// Adds a strategy; throws tessera::InvalidInput if the name is empty or already taken.
@@ -71,6 +71,7 @@ std::shared_ptr<const ColouringStrategy> make_greedy_strategy();
 std::shared_ptr<const ColouringStrategy> make_largest_first_strategy();
 std::shared_ptr<const ColouringStrategy> make_smallest_last_strategy();
 std::shared_ptr<const ColouringStrategy> make_dsatur_strategy();
+std::shared_ptr<const ColouringStrategy> make_stencil_strategy();
 std::shared_ptr<const ColouringStrategy> make_iterated_greedy_strategy();
 std::shared_ptr<const ColouringStrategy> make_random_strategy();
 std::shared_ptr<const ColouringStrategy> make_metis_strategy();

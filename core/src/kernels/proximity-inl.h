@@ -5,8 +5,9 @@
 // no lane's result depends on its neighbours.
 //
 // Each family first finds the closest-point parameters, then holds them fixed while
-// differentiating (Müller et al. 2007, "Position Based Dynamics", §4 collision constraints;
-// closest-point regions after Ericson 2005, "Real-Time Collision Detection", §5.1):
+// differentiating (Müller et al. 2007, "Position Based Dynamics", whose point–triangle
+// collision constraint these generalise; closest-point regions after Ericson 2005,
+// "Real-Time Collision Detection", §5.1):
 //
 //   point–edge, particles (p, p0, p1):   q = (1 - t) p0 + t p1,  t ∈ [0, 1]
 //       C = |p - q| - d0,  ∇_p C = n,  ∇_{p0} C = -(1 - t) n,  ∇_{p1} C = -t n

@@ -6,7 +6,8 @@
 // Particle order per constraint: p, p0, p1, p2. PBD stiffness semantics only (the seed has
 // no XPBD form): the compression stiffness applies where C < 0, the stretch stiffness where
 // C ≥ 0. Degenerate (no correction) when p lies on the triangle; a triangle of zero area or
-// too thin for face coordinates is measured to its three edges.
+// too thin for face coordinates is measured to its edges, i.e. to its longest edge (see
+// position_based_dynamics.hpp for the threshold).
 #pragma once
 
 #include <cstddef>

@@ -1,1 +1,155 @@
-// (being written: the fem_tetra batch kernel)
+// FEM tetrahedron constraints in SoA batches: validation at the door (rest volume and inverse
+// from the scalar API's init, the material checked once), then the batched PBD and XPBD
+// kernels — one lane formula, kernels/fem-inl.h, with the branch-free SVD of svd3-inl.h for
+// the inversion-robust material — compiled once per SIMD target (Highway foreach_target) and
+// dispatched at run time.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "fem_tetra_constraints.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+#include <tessera/core/fem_tetra_constraints.hpp>
+
+#include "kernels/batch-inl.h"
+#include "kernels/fem-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace tessera {
+namespace HWY_NAMESPACE {
+
+template <bool kCompliance, bool kHandleInversion>
+HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
+                                          FEMTetraConstraints& constraints, std::size_t begin,
+                                          std::size_t end, Real time_step) {
+  const RealTag d;
+  const std::size_t lanes = hn::Lanes(d);
+  const ParticleIndex* slot[4];
+  for (int k = 0; k < 4; ++k) slot[k] = constraints.particles.particle[std::size_t(k)].data();
+  const RealLanes dt = hn::Set(d, time_step);
+  for (std::size_t i = begin; i < end; i += lanes) {
+    const std::size_t active_count = end - i;
+    const LaneMask active = hn::FirstN(d, active_count);
+    ParticleLanes gathered[4];
+    Vec3<RealLanes> p[4];
+    RealLanes w[4];
+    for (int k = 0; k < 4; ++k) {
+      gathered[k] = gather_particles(particles, slot[k] + i);
+      p[k] = gathered[k].position;
+      w[k] = gathered[k].inverse_mass;
+    }
+    Mat3<RealLanes> rest_inverse;
+    for (int j = 0; j < 3; ++j)
+      rest_inverse.col[j] = {
+          hn::LoadU(d, constraints.rest_inverse[std::size_t(j)].data() + i),
+          hn::LoadU(d, constraints.rest_inverse[std::size_t(3 + j)].data() + i),
+          hn::LoadU(d, constraints.rest_inverse[std::size_t(6 + j)].data() + i)};
+    const RealLanes volume = hn::LoadU(d, constraints.volume.data() + i);
+    const RealLanes poisson = hn::LoadU(d, constraints.poisson_ratio.data() + i);
+    Vec3<RealLanes> corr[4];
+    if constexpr (kCompliance) {
+      RealLanes lambda = hn::LoadU(d, constraints.lambda.data() + i);
+      fem_tetra_xpbd(p, w, volume, rest_inverse, poisson,
+                     hn::LoadU(d, constraints.compliance.data() + i), dt, kHandleInversion,
+                     lambda, corr);
+      store_active(lambda, active_count, constraints.lambda.data() + i);
+    } else {
+      fem_tetra_pbd(p, w, volume, rest_inverse,
+                    hn::LoadU(d, constraints.youngs_modulus.data() + i), poisson,
+                    kHandleInversion, corr);
+    }
+    for (int k = 0; k < 4; ++k)
+      scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
+  }
+}
+
+void ProjectFEMTetraConstraints(ParticleArrays particles, FEMTetraConstraints& constraints,
+                                std::size_t begin, std::size_t end,
+                                ProjectionSettings settings) {
+  const bool compliance = settings.semantics == ConstraintSemantics::compliance;
+  if (compliance) {
+    if (constraints.handle_inversion)
+      project_fem_tetra_lanes<true, true>(particles, constraints, begin, end, settings.dt);
+    else
+      project_fem_tetra_lanes<true, false>(particles, constraints, begin, end, settings.dt);
+  } else {
+    if (constraints.handle_inversion)
+      project_fem_tetra_lanes<false, true>(particles, constraints, begin, end, settings.dt);
+    else
+      project_fem_tetra_lanes<false, false>(particles, constraints, begin, end, settings.dt);
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace tessera
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include <tessera/core/position_based_dynamics.hpp>
+
+#include "constraint_validation.hpp"
+
+namespace tessera {
+namespace {
+
+std::string describe(Real value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
+}  // namespace
+
+HWY_EXPORT(ProjectFEMTetraConstraints);
+
+FEMTetraConstraints make_fem_tetra_constraints(const FEMTetraConstraintInput& input) {
+  const detail::ConstraintValidator validator(FEMTetraConstraints::kFamily,
+                                              input.rest_positions.size());
+  if (!std::isfinite(input.youngs_modulus) || !(input.youngs_modulus > 0))
+    validator.fail_input("Young's modulus is " + describe(input.youngs_modulus) +
+                         ", must be finite and > 0");
+  if (!(input.poisson_ratio > -1 && input.poisson_ratio < Real(0.5)))
+    validator.fail_input("Poisson ratio is " + describe(input.poisson_ratio) +
+                         ", must lie in (-1, 0.5)");
+  FEMTetraConstraints result;
+  result.particles = validator.particles<4>(input.particles);
+  const std::size_t n = result.size();
+  result.volume = detail::filled(n, 0);
+  for (auto& entry : result.rest_inverse) entry = detail::filled(n, 0);
+  for (std::size_t c = 0; c < n; ++c) {
+    Vector3r p[4];
+    for (int k = 0; k < 4; ++k) {
+      p[k] = input.rest_positions[result.particles.particle[std::size_t(k)][c]];
+      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
+    }
+    Real volume;
+    Matrix3r rest_inverse;
+    if (!PositionBasedDynamics::init_FEMTetraConstraint(p[0], p[1], p[2], p[3], volume,
+                                                        rest_inverse))
+      validator.fail(c, "rest tetrahedron is flat (zero volume)");
+    result.volume[c] = volume;
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j) result.rest_inverse[std::size_t(3 * k + j)][c] = rest_inverse(k, j);
+  }
+  result.youngs_modulus = detail::filled(n, input.youngs_modulus);
+  result.poisson_ratio = detail::filled(n, input.poisson_ratio);
+  result.compliance = detail::filled(n, 1 / input.youngs_modulus);
+  result.lambda = detail::filled(n, 0);
+  result.handle_inversion = input.handle_inversion;
+  return result;
+}
+
+void project_fem_tetra_constraints(ParticleArrays particles, FEMTetraConstraints& constraints,
+                                   std::size_t begin, std::size_t end,
+                                   const ProjectionSettings& settings) {
+  check_projection_range(FEMTetraConstraints::kFamily, begin, end, constraints.size(),
+                         constraints.particles.particle_count, particles);
+  HWY_DYNAMIC_DISPATCH(ProjectFEMTetraConstraints)(particles, constraints, begin, end, settings);
+}
+
+}  // namespace tessera
+#endif  // HWY_ONCE

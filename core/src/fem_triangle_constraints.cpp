@@ -1,1 +1,124 @@
-// (being written: the fem_triangle batch kernel)
+// FEM triangle constraints in SoA batches: validation at the door (rest frame and area from
+// the scalar API's init, the material checked positive definite once), then the batched
+// kernel — one lane formula, kernels/fem-inl.h — compiled once per SIMD target (Highway
+// foreach_target) and dispatched at run time.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "fem_triangle_constraints.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+#include <tessera/core/fem_triangle_constraints.hpp>
+
+#include "kernels/batch-inl.h"
+#include "kernels/fem-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace tessera {
+namespace HWY_NAMESPACE {
+
+void ProjectFEMTriangleConstraints(ParticleArrays particles,
+                                   FEMTriangleConstraints& constraints, std::size_t begin,
+                                   std::size_t end) {
+  const RealTag d;
+  const std::size_t lanes = hn::Lanes(d);
+  const ParticleIndex* slot[3];
+  for (int k = 0; k < 3; ++k) slot[k] = constraints.particles.particle[std::size_t(k)].data();
+  for (std::size_t i = begin; i < end; i += lanes) {
+    const LaneMask active = hn::FirstN(d, end - i);
+    ParticleLanes gathered[3];
+    Vec3<RealLanes> p[3];
+    RealLanes w[3];
+    for (int k = 0; k < 3; ++k) {
+      gathered[k] = gather_particles(particles, slot[k] + i);
+      p[k] = gathered[k].position;
+      w[k] = gathered[k].inverse_mass;
+    }
+    RealLanes m[2][2];
+    for (int k = 0; k < 2; ++k)
+      for (int j = 0; j < 2; ++j)
+        m[k][j] = hn::LoadU(d, constraints.rest_inverse[std::size_t(2 * k + j)].data() + i);
+    Vec3<RealLanes> corr[3];
+    fem_triangle_pbd(p, w, hn::LoadU(d, constraints.area.data() + i), m,
+                     hn::LoadU(d, constraints.youngs_modulus_x.data() + i),
+                     hn::LoadU(d, constraints.youngs_modulus_y.data() + i),
+                     hn::LoadU(d, constraints.youngs_modulus_shear.data() + i),
+                     hn::LoadU(d, constraints.poisson_ratio_xy.data() + i),
+                     hn::LoadU(d, constraints.poisson_ratio_yx.data() + i), corr);
+    for (int k = 0; k < 3; ++k)
+      scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace tessera
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include <cmath>
+#include <string>
+
+#include <tessera/core/position_based_dynamics.hpp>
+
+#include "constraint_validation.hpp"
+
+namespace tessera {
+
+HWY_EXPORT(ProjectFEMTriangleConstraints);
+
+FEMTriangleConstraints make_fem_triangle_constraints(const FEMTriangleConstraintInput& input) {
+  const detail::ConstraintValidator validator(FEMTriangleConstraints::kFamily,
+                                              input.rest_positions.size());
+  const Real ex = input.youngs_modulus_x, ey = input.youngs_modulus_y,
+             g = input.youngs_modulus_shear, nxy = input.poisson_ratio_xy,
+             nyx = input.poisson_ratio_yx;
+  const Real material[5] = {ex, ey, g, nxy, nyx};
+  const char* names[5] = {"Young's modulus x", "Young's modulus y", "shear modulus",
+                          "Poisson ratio xy", "Poisson ratio yx"};
+  for (int k = 0; k < 5; ++k)
+    if (!std::isfinite(material[k])) validator.fail_input(std::string(names[k]) + " is not finite");
+  // The same positive-definiteness test as the kernel (solve_FEMTriangleConstraint).
+  const Real one_minus_product = 1 - nxy * nyx;
+  const Real c_xy = Real(0.5) * (nyx * ex + nxy * ey) / one_minus_product;
+  if (!(ex > 0) || !(ey > 0) || !(g > 0) || !(one_minus_product > 0) ||
+      !((ex / one_minus_product) * (ey / one_minus_product) - c_xy * c_xy > 0))
+    validator.fail_input("material is not positive definite (E_x, E_y, G > 0, ν_xy ν_yx < 1 "
+                         "and a positive normal-stress determinant are required)");
+
+  FEMTriangleConstraints result;
+  result.particles = validator.particles<3>(input.particles);
+  const std::size_t n = result.size();
+  result.area = detail::filled(n, 0);
+  for (auto& entry : result.rest_inverse) entry = detail::filled(n, 0);
+  for (std::size_t c = 0; c < n; ++c) {
+    Vector3r p[3];
+    for (int k = 0; k < 3; ++k) {
+      p[k] = input.rest_positions[result.particles.particle[std::size_t(k)][c]];
+      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
+    }
+    Real area;
+    Matrix2r rest_inverse;
+    if (!PositionBasedDynamics::init_FEMTriangleConstraint(p[0], p[1], p[2], area, rest_inverse))
+      validator.fail(c, "rest triangle has zero area");
+    result.area[c] = area;
+    for (int k = 0; k < 2; ++k)
+      for (int j = 0; j < 2; ++j) result.rest_inverse[std::size_t(2 * k + j)][c] = rest_inverse(k, j);
+  }
+  result.youngs_modulus_x = detail::filled(n, ex);
+  result.youngs_modulus_y = detail::filled(n, ey);
+  result.youngs_modulus_shear = detail::filled(n, g);
+  result.poisson_ratio_xy = detail::filled(n, nxy);
+  result.poisson_ratio_yx = detail::filled(n, nyx);
+  return result;
+}
+
+void project_fem_triangle_constraints(ParticleArrays particles,
+                                      FEMTriangleConstraints& constraints, std::size_t begin,
+                                      std::size_t end, const ProjectionSettings& /*settings*/) {
+  check_projection_range(FEMTriangleConstraints::kFamily, begin, end, constraints.size(),
+                         constraints.particles.particle_count, particles);
+  HWY_DYNAMIC_DISPATCH(ProjectFEMTriangleConstraints)(particles, constraints, begin, end);
+}
+
+}  // namespace tessera
+#endif  // HWY_ONCE

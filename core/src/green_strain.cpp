@@ -4,14 +4,23 @@
 // gradient comes from the first Piola–Kirchhoff stress. The inversion-robust variant follows
 // Irving et al. 2004: evaluate the material on the diagonalised deformation gradient, where an
 // inverted element shows up as one negative singular value that can be clamped.
+//
+// computeGradCGreen and computeGreenStrainAndPiolaStress are one lane of the FEM formula
+// (kernels/fem-inl.h). computeGreenStrainAndPiolaStressInversion stays on Eigen's JacobiSVD:
+// it is the independent reference the branch-free lane SVD (kernels/svd3-inl.h) that the FEM
+// solve functions and batch kernels use is tested against.
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
 
 #include <tessera/core/position_based_dynamics.hpp>
 
+#include "kernels/fem-inl.h"
+
 namespace tessera {
 namespace {
+
+namespace lanes = HWY_NAMESPACE;
 
 using Matrix3 = Eigen::Matrix<Real, 3, 3>;
 
@@ -30,24 +39,24 @@ Matrix3 deformation_gradient(const Vector3r& x1, const Vector3r& x2, const Vecto
 void PositionBasedDynamics::computeGradCGreen(Real restVolume, const Matrix3r& invRestMat,
                                               const Matrix3r& sigma, Vector3r* J) {
   // ψ depends on the vertices through F = Ds · Dm⁻¹, so dE = V P : dF = (V P Dm⁻ᵀ) : dDs.
-  const Matrix3 H = restVolume * Matrix3(sigma) * Matrix3(invRestMat).transpose();
-  J[1] = H.col(0);
-  J[2] = H.col(1);
-  J[3] = H.col(2);
-  J[0] = -(J[1] + J[2] + J[3]);
+  lanes::Vec3<Real> gradient[4];
+  lanes::green_strain_gradient<Real>(restVolume, lanes::from_eigen(invRestMat),
+                                     lanes::from_eigen(sigma), gradient);
+  for (int i = 0; i < 4; ++i) J[i] = lanes::to_eigen(gradient[i]);
 }
 
 void PositionBasedDynamics::computeGreenStrainAndPiolaStress(
     const Vector3r& x1, const Vector3r& x2, const Vector3r& x3, const Vector3r& x4,
     const Matrix3r& invRestMat, const Real restVolume, const Real mu, const Real lambda,
     Matrix3r& epsilon, Matrix3r& sigma, Real& energy) {
-  const Matrix3 F = deformation_gradient(x1, x2, x3, x4, invRestMat);
-  const Matrix3 strain = Real(0.5) * (F.transpose() * F - Matrix3::Identity());
-  const Real trace = strain.trace();
-  const Matrix3 second_piola = 2 * mu * strain + lambda * trace * Matrix3::Identity();
-  epsilon = strain;
-  sigma = F * second_piola;
-  energy = restVolume * (mu * strain.squaredNorm() + Real(0.5) * lambda * trace * trace);
+  const lanes::Vec3<Real> x[4] = {lanes::from_eigen(x1), lanes::from_eigen(x2),
+                                  lanes::from_eigen(x3), lanes::from_eigen(x4)};
+  const auto material = lanes::green_strain_material<Real>(
+      lanes::deformation_gradient<Real>(x, lanes::from_eigen(invRestMat)), restVolume, mu,
+      lambda);
+  epsilon = lanes::to_eigen(material.strain);
+  sigma = lanes::to_eigen(material.stress);
+  energy = material.energy;
 }
 
 void PositionBasedDynamics::computeGreenStrainAndPiolaStressInversion(

@@ -8,6 +8,7 @@
 #include <limits>
 #include <sstream>
 
+#include <tessera/coloring/locality.hpp>
 #include <tessera/coloring/refinement.hpp>
 
 namespace tessera {
@@ -108,6 +109,10 @@ ColouringRun run_colouring(const ColouringStrategy& strategy, const ConstraintGr
   if (options.balance) {
     colouring = balance_colours(graph, colouring);
     name += "+balance";
+  }
+  if (options.locality) {
+    colouring = improve_locality(graph, colouring);
+    name += "+locality";
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ColouringStatistics statistics = compute_statistics(graph, colouring, std::move(name), seconds);

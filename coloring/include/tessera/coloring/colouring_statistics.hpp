@@ -54,7 +54,7 @@ struct ColouringRun {
   ColouringStatistics statistics;
 };
 
-/// Runs `strategy`, then the post-passes the options ask for (reduce, then balance), timing
+/// Runs `strategy`, then the post-passes the options ask for (reduce, balance, locality), timing
 /// the whole and validating the result.
 ColouringRun run_colouring(const ColouringStrategy& strategy, const ConstraintGraph& graph,
                            const ColouringOptions& options = {});

@@ -24,9 +24,12 @@ struct ColouringOptions {
   /// Rounds of iterated greedy (Culberson) in the reduction pass; each round recolours the
   /// constraints first-fit, colour class by colour class, which never adds a colour.
   std::size_t reduction_rounds = 24;
-  /// Post-passes applied by run_colouring after any strategy, reduction first.
+  /// Post-passes applied by run_colouring after any strategy: reduction, balance, locality.
   bool reduce = false;
   bool balance = false;
+  /// Last post-pass: improve_locality (particles renumbered by reverse Cuthill–McKee unless
+  /// the strategy renumbered them, each colour's constraints by smallest new particle).
+  bool locality = false;
 };
 
 /// A way of colouring a constraint graph. Implementations must be deterministic: the same

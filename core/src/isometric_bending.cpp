@@ -18,6 +18,7 @@
 #include <tessera/core/position_based_dynamics.hpp>
 #include <tessera/core/xpbd.hpp>
 
+#include "isometric_bending_factor.hpp"
 #include "kernels/isometric_bending-inl.h"
 
 namespace tessera {
@@ -57,10 +58,9 @@ lanes::ConstraintValue<Real, 4> evaluate(const Vector3r& p0, const Vector3r& p1,
                                          const Matrix4r& Q) {
   const lanes::Vec3<Real> p[4] = {lanes::from_eigen(p0), lanes::from_eigen(p1),
                                   lanes::from_eigen(p2), lanes::from_eigen(p3)};
-  Real q[4][4];
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) q[i][j] = Q(i, j);
-  return lanes::isometric_bending_constraint<Real>(p, q);
+  const Vector4r factor = detail::isometric_bending_factor(Q);
+  const Real k[4] = {factor[0], factor[1], factor[2], factor[3]};
+  return lanes::isometric_bending_constraint<Real>(p, k);
 }
 
 void write_corrections(const lanes::Vec3<Real> (&corr)[4], Vector3r& corr0, Vector3r& corr1,
@@ -72,6 +72,18 @@ void write_corrections(const lanes::Vec3<Real> (&corr)[4], Vector3r& corr0, Vect
 }
 
 }  // namespace
+
+namespace detail {
+
+Vector4r isometric_bending_factor(const Matrix4r& Q) {
+  int largest = 0;
+  for (int i = 1; i < 4; ++i)
+    if (Q(i, i) > Q(largest, largest)) largest = i;
+  if (!(Q(largest, largest) > 0)) return Vector4r::Zero();
+  return Vector4r(Q.row(largest).transpose()) / std::sqrt(Q(largest, largest));
+}
+
+}  // namespace detail
 
 bool PositionBasedDynamics::init_IsometricBendingConstraint(const Vector3r& p0,
                                                             const Vector3r& p1,

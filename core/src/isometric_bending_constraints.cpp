@@ -1,7 +1,7 @@
 // Isometric bending constraints in SoA batches: validation at the door (each stencil's Q built
-// by init_IsometricBendingConstraint, the scalar API's own set-up, and stored as its 10
-// distinct entries), then the batched kernel, compiled once per SIMD target (Highway
-// foreach_target) and dispatched at run time.
+// by init_IsometricBendingConstraint, the scalar API's own set-up, and stored as its rank-one
+// factor k, Q = k kᵀ, recovered as the scalar API does), then the batched kernel, compiled
+// once per SIMD target (Highway foreach_target) and dispatched at run time.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "isometric_bending_constraints.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -21,20 +21,16 @@ void ProjectIsometricBendingConstraints(ParticleArrays particles,
                                         IsometricBendingConstraints& constraints,
                                         std::size_t begin, std::size_t end,
                                         ProjectionSettings settings) {
-  using Constraints = IsometricBendingConstraints;
   const RealTag d;
-  const Real* q[Constraints::kMatrixEntries];
-  for (int e = 0; e < Constraints::kMatrixEntries; ++e)
-    q[e] = constraints.q[std::size_t(e)].data();
+  const Real* factor[4];
+  for (std::size_t j = 0; j < 4; ++j) factor[j] = constraints.factor[j].data();
   project_constraint_lanes<4>(
       particles, constraints.particles,
       {constraints.stiffness.data(), constraints.compliance.data(), constraints.lambda.data()},
       begin, end, settings, [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
-        RealLanes Q[4][4];
-        for (int r = 0; r < 4; ++r)
-          for (int c = r; c < 4; ++c)
-            Q[r][c] = Q[c][r] = hn::LoadU(d, q[Constraints::entry(r, c)] + i);
-        return isometric_bending_constraint(p, Q);
+        const RealLanes k[4] = {hn::LoadU(d, factor[0] + i), hn::LoadU(d, factor[1] + i),
+                                hn::LoadU(d, factor[2] + i), hn::LoadU(d, factor[3] + i)};
+        return isometric_bending_constraint(p, k);
       });
 }
 
@@ -46,16 +42,15 @@ HWY_AFTER_NAMESPACE();
 #include <tessera/core/position_based_dynamics.hpp>
 
 #include "constraint_validation.hpp"
+#include "isometric_bending_factor.hpp"
 
 namespace tessera {
 
 HWY_EXPORT(ProjectIsometricBendingConstraints);
 
 Matrix4r IsometricBendingConstraints::matrix(std::size_t c) const {
-  Matrix4r Q;
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) Q(i, j) = q[std::size_t(entry(i, j))][c];
-  return Q;
+  const Vector4r k(factor[0][c], factor[1][c], factor[2][c], factor[3][c]);
+  return k * k.transpose();
 }
 
 IsometricBendingConstraints make_isometric_bending_constraints(
@@ -67,7 +62,7 @@ IsometricBendingConstraints make_isometric_bending_constraints(
   IsometricBendingConstraints result;
   result.particles = validator.particles<4>(input.particles);
   const std::size_t n = result.size();
-  for (auto& entries : result.q) entries = detail::filled(n, 0);
+  for (auto& entries : result.factor) entries = detail::filled(n, 0);
   for (std::size_t c = 0; c < n; ++c) {
     Vector3r p[4];
     for (std::size_t k = 0; k < 4; ++k) {
@@ -85,9 +80,8 @@ IsometricBendingConstraints make_isometric_bending_constraints(
     if (!PositionBasedDynamics::init_IsometricBendingConstraint(p[0], p[1], p[2], p[3], Q) ||
         !Q.allFinite())
       validator.fail(c, "degenerate rest stencil: the bending matrix Q is undefined");
-    for (int i = 0; i < 4; ++i)
-      for (int j = i; j < 4; ++j)
-        result.q[std::size_t(IsometricBendingConstraints::entry(i, j))][c] = Q(i, j);
+    const Vector4r k = detail::isometric_bending_factor(Q);
+    for (std::size_t j = 0; j < 4; ++j) result.factor[j][c] = k[int(j)];
   }
   result.stiffness = detail::filled(n, input.stiffness);
   result.compliance = detail::filled(n, input.compliance);

@@ -218,6 +218,24 @@ TEST(IsometricBending, RepeatedProjectionConvergesMonotonically) {
   }
 }
 
+// A stencil at its flat rest shape, rotated and placed far from the origin, is flat only up to
+// the rounding of its coordinates. Its projection must then move the particles by rounding
+// size, not by the size of the stencil (C and ∇C are evaluated through the curvature vector
+// u = Σ k_j p_j of Q = k kᵀ, so the step is proportional to u).
+TEST(IsometricBending, NearlyFlatStencilsDoNotJitter) {
+  Random random(99);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Points planar = random_planar_stencil(random);
+    const Points rest = transformed(planar, random.rotation(), random.vector(-100, 100));
+    const Matrix4r Q = bending_matrix(rest);
+    const Projection r = project(rest, {1, 1, 1, 1}, Q, 1);
+    EXPECT_TRUE(r.ok);
+    Real size = 0;
+    for (const Vector3r& p : rest) size = std::max(size, Real((p - rest[2]).norm()));
+    EXPECT_LE(max_norm(r.corr), 200 * kEpsilon * (size + 100)) << "trial " << trial;
+  }
+}
+
 TEST(IsometricBending, DegenerateInput) {
   Matrix4r Q;
   Points x = kSymmetricStencil;

@@ -4,9 +4,15 @@
 // (isometric_bending_constraints.cpp).
 //
 // Vertex order as for the dihedral constraint: p2-p3 is the shared edge, the triangles are
-// (p0, p2, p3) and (p1, p3, p2). Q (4×4, from the rest shape, indexed p0..p3) is constant, so
-//   C = ½ Σ_ij Q_ij p_i · p_j,   ∇_{pi} C = Σ_j Q_ij p_j.
-// Q's rows sum to zero, so the positions are taken relative to their centroid first (the same
+// (p0, p2, p3) and (p1, p3, p2). Q (4×4, from the rest shape, indexed p0..p3) is constant and
+// of rank one, Q = k kᵀ (k = √(3/(A0+A1)) · K, K the cotangent Laplacian row), so with the
+// discrete mean-curvature vector u = Σ_j k_j p_j
+//   C = ½ Σ_ij Q_ij p_i · p_j = ½ |u|²,   ∇_{pi} C = Σ_j Q_ij p_j = k_i u.
+// Evaluating through u matters: the PBD step C ∇_i C / Σ w|∇C|² = ½ k_i u / Σ_j w_j k_j² is
+// then proportional to u, well conditioned for a nearly flat stencil. Written with Q directly
+// (C = ½ p·Qp), C of a stencil that is flat up to rounding is rounding noise times the
+// stencil's size while ∇C is rounding noise, and the step jumps by the size of the stencil.
+// k sums to zero, so the positions are taken relative to their centroid first (the same
 // value, without cancellation far from the origin).
 // Invalid lane (zero corrections): Σ_i |∇_i C|² ≤ tol², a stencil that is flat for its Q;
 // such a lane *satisfies* the constraint, which bending_is_flat reports to the scalar API.
@@ -23,24 +29,20 @@ HWY_BEFORE_NAMESPACE();
 namespace tessera {
 namespace HWY_NAMESPACE {
 
-/// C and ∇C for the stencil (p0, p1; shared edge p2-p3) and its matrix Q (Q[i][j] = Q_ij).
+/// C and ∇C for the stencil (p0, p1; shared edge p2-p3) and the factor k of its Q = k kᵀ.
 template <class V>
 HWY_INLINE ConstraintValue<V, 4> isometric_bending_constraint(const Vec3<V> (&p)[4],
-                                                              const V (&Q)[4][4]) {
+                                                              const V (&k)[4]) {
   ConstraintValue<V, 4> value;
   const Vec3<V> centroid = (p[0] + p[1] + p[2] + p[3]) * splat<V>(0.25);
-  Vec3<V> relative[4];
-  for (int i = 0; i < 4; ++i) relative[i] = p[i] - centroid;
-  V C = zero<V>();
+  Vec3<V> u = (p[0] - centroid) * k[0];
+  for (int j = 1; j < 4; ++j) u += (p[j] - centroid) * k[j];
   V gradient_squared = zero<V>();
   for (int i = 0; i < 4; ++i) {
-    Vec3<V> g = relative[0] * Q[i][0];
-    for (int j = 1; j < 4; ++j) g += relative[j] * Q[i][j];
-    value.gradient[i] = g;
-    C = C + dot(relative[i], g);
-    gradient_squared = gradient_squared + squared_norm(g);
+    value.gradient[i] = u * k[i];
+    gradient_squared = gradient_squared + squared_norm(value.gradient[i]);
   }
-  value.C = C * splat<V>(0.5);
+  value.C = squared_norm(u) * splat<V>(0.5);
   value.valid = gradient_squared > degenerate_denominator<V>();
   return value;
 }

@@ -1,7 +1,7 @@
 // Isometric bending constraints as an SoA batch: C = ½ Σ_ij Q_ij p_i · p_j with the constant
 // 4×4 matrix Q of each stencil's rest shape (Bergou et al. 2006, "A Quadratic Bending Model
 // for Inextensible Surfaces"), PBD stiffness or XPBD compliance. Cheap bending for cloth that
-// hardly stretches: each projection is a small matrix–vector product.
+// hardly stretches: Q has rank one, Q = k kᵀ, and each projection is C = ½ |Σ k_j p_j|².
 #pragma once
 
 #include <array>
@@ -28,24 +28,17 @@ struct IsometricBendingConstraintInput {
 
 struct IsometricBendingConstraints {
   static constexpr const char* kFamily = "isometric bending";
-  /// Q is symmetric: only its upper triangle is stored, row by row,
-  ///   q[0..9] = Q00 Q01 Q02 Q03 Q11 Q12 Q13 Q22 Q23 Q33.
-  static constexpr int kMatrixEntries = 10;
-  /// Position of Q_ij in q (either order of i and j).
-  static constexpr int entry(int i, int j) {
-    const int r = i < j ? i : j, c = i < j ? j : i;
-    return r * 4 - r * (r - 1) / 2 + (c - r);
-  }
 
   ConstraintParticles<4> particles;
-  std::array<AlignedVector<Real>, kMatrixEntries> q;
+  /// The rank-one factor of each Q = k kᵀ: factor[j][c] is k_j of constraint c.
+  std::array<AlignedVector<Real>, 4> factor;
   AlignedVector<Real> stiffness;
   AlignedVector<Real> compliance;
   /// XPBD multiplier, reset to 0 by the caller at the start of each time step.
   AlignedVector<Real> lambda;
 
   std::size_t size() const { return particles.count; }
-  /// Q of constraint c, unpacked.
+  /// Q = k kᵀ of constraint c.
   Matrix4r matrix(std::size_t c) const;
 };
 

@@ -130,8 +130,11 @@ class PositionBasedDynamics {
                                               Matrix4r& Q);
 
   /// C = ½ Σ_ij Q_ij p_i · p_j  (≥ 0, zero when the stencil is flat),  ∇_{pi} C = Σ_j Q_ij p_j.
-  /// A stencil with ∇C = 0 (flat for its Q) satisfies the constraint: zero corrections and
-  /// true. False (zero corrections) when every particle is static.
+  /// Q must come from init_IsometricBendingConstraint: it has rank one, Q = k kᵀ, and both are
+  /// evaluated through its factor as C = ½ |u|², ∇_{pi} C = k_i u with u = Σ_j k_j p_j, so a
+  /// stencil flat up to rounding moves by rounding only. A stencil with ∇C = 0 (flat for its
+  /// Q) satisfies the constraint: zero corrections and true. False (zero corrections) when
+  /// every particle is static.
   static bool solve_IsometricBendingConstraint(const Vector3r& p0, Real invMass0,
                                                const Vector3r& p1, Real invMass1,
                                                const Vector3r& p2, Real invMass2,

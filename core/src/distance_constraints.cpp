@@ -8,7 +8,7 @@
 
 #include <tessera/core/distance_constraints.hpp>
 
-#include "kernels/batch-inl.h"
+#include "kernels/batch_loop-inl.h"
 #include "kernels/distance-inl.h"
 
 HWY_BEFORE_NAMESPACE();
@@ -19,30 +19,13 @@ void ProjectDistanceConstraints(ParticleArrays particles, DistanceConstraints& c
                                 std::size_t begin, std::size_t end,
                                 ProjectionSettings settings) {
   const RealTag d;
-  const std::size_t lanes = hn::Lanes(d);
-  const ParticleIndex* slot0 = constraints.particles.particle[0].data();
-  const ParticleIndex* slot1 = constraints.particles.particle[1].data();
-  const bool compliance = settings.semantics == ConstraintSemantics::compliance;
-  const RealLanes dt = hn::Set(d, settings.dt);
-  for (std::size_t i = begin; i < end; i += lanes) {
-    const std::size_t active_count = end - i;
-    const LaneMask active = hn::FirstN(d, active_count);
-    const ParticleLanes a = gather_particles(particles, slot0 + i);
-    const ParticleLanes b = gather_particles(particles, slot1 + i);
-    const auto value = distance_constraint(a.position, b.position,
-                                           hn::LoadU(d, constraints.rest_length.data() + i));
-    const RealLanes w[2] = {a.inverse_mass, b.inverse_mass};
-    Vec3<RealLanes> corr[2];
-    if (compliance) {
-      RealLanes lambda = hn::LoadU(d, constraints.lambda.data() + i);
-      project_xpbd(value, w, hn::LoadU(d, constraints.compliance.data() + i), dt, lambda, corr);
-      store_active(lambda, active_count, constraints.lambda.data() + i);
-    } else {
-      project_pbd(value, w, hn::LoadU(d, constraints.stiffness.data() + i), corr);
-    }
-    scatter_corrected(particles, slot0 + i, a, corr[0], active);
-    scatter_corrected(particles, slot1 + i, b, corr[1], active);
-  }
+  const Real* rest_length = constraints.rest_length.data();
+  project_constraint_lanes<2>(
+      particles, constraints.particles,
+      {constraints.stiffness.data(), constraints.compliance.data(), constraints.lambda.data()},
+      begin, end, settings, [&](const Vec3<RealLanes> (&p)[2], std::size_t i) {
+        return distance_constraint(p[0], p[1], hn::LoadU(d, rest_length + i));
+      });
 }
 
 }  // namespace HWY_NAMESPACE

@@ -58,6 +58,7 @@ void ProjectShapeMatchingConstraints(ParticleArrays particles,
     const auto first = hn::LoadU(d32, offsets + i);
     const auto last = hn::LoadU(d32, offsets + i + 1);
     const auto size = hn::IfThenElseZero(hn::FirstN(d32, active_count), hn::Sub(last, first));
+    const IndexLanes wide_size = widen(size);  // as wide as Real, for masks over Real lanes
     const auto last_entry = hn::Max(hn::Sub(last, hn::Set(d32, 1)), hn::Zero(d32));
     std::size_t block_size = 0;
     for (std::size_t lane = 0; lane < active_count; ++lane)
@@ -69,7 +70,7 @@ void ProjectShapeMatchingConstraints(ParticleArrays particles,
     Vec3<RealLanes> weighted = Vec3<RealLanes>::zeros();
     for (std::size_t k = 0; k < block_size; ++k) {
       const auto k32 = hn::Set(d32, int32_t(k));
-      const LaneMask in_cluster = hn::RebindMask(d, hn::Lt(k32, size));
+      const LaneMask in_cluster = hn::RebindMask(d, hn::Lt(widen(k32), wide_size));
       const auto entry32 = hn::Min(hn::Add(first, k32), last_entry);
       const auto particle32 = hn::GatherIndex(d32, entry_particle, entry32);
       hn::StoreU(particle32, d32, reinterpret_cast<int32_t*>(scratch_index.data() + k * lanes));
@@ -124,7 +125,7 @@ void ProjectShapeMatchingConstraints(ParticleArrays particles,
     for (std::size_t k = 0; k < block_size; ++k) {
       const Real* row = scratch.data() + k * kScratchRows * lanes;
       const auto k32 = hn::Set(d32, int32_t(k));
-      const LaneMask write = hn::And(valid, hn::RebindMask(d, hn::Lt(k32, size)));
+      const LaneMask write = hn::And(valid, hn::RebindMask(d, hn::Lt(widen(k32), wide_size)));
       ParticleLanes p;
       p.position = {hn::Load(d, row), hn::Load(d, row + lanes), hn::Load(d, row + 2 * lanes)};
       p.inverse_mass = hn::Load(d, row + 3 * lanes);

@@ -91,7 +91,9 @@ class PositionBasedDynamics {
   ///   C = |p - q| - d0,   ∇_p C = n,  ∇_{pi} C = -b_i n.
   /// Stiffness as for the point–edge constraint. A triangle of zero area (or so thin that
   /// |(p1 - p0) × (p2 - p0)|² ≤ kDegenerateTolerance |p1 - p0|² |p2 - p0|²) is measured to its
-  /// three edges. Degenerate when p lies on the triangle.
+  /// longest edge (for zero area the longest edge covers the other two, so the closest point
+  /// is exact; the choice does not depend on rounding). Degenerate when p lies on the
+  /// triangle.
   static bool solve_TrianglePointDistanceConstraint(
       const Vector3r& p, Real invMass, const Vector3r& p0, Real invMass0, const Vector3r& p1,
       Real invMass1, const Vector3r& p2, Real invMass2, const Real restDist,

@@ -5,6 +5,7 @@
 #include <tessera/core/xpbd.hpp>
 
 #include "kernels/dihedral-inl.h"
+#include "scalar_projection.hpp"
 
 namespace tessera {
 namespace {
@@ -19,14 +20,6 @@ lanes::ConstraintValue<Real, 4> evaluate(const Vector3r& p0, const Vector3r& p1,
                                           rest_angle);
 }
 
-void write_corrections(const lanes::Vec3<Real> (&corr)[4], Vector3r& corr0, Vector3r& corr1,
-                       Vector3r& corr2, Vector3r& corr3) {
-  corr0 = lanes::to_eigen(corr[0]);
-  corr1 = lanes::to_eigen(corr[1]);
-  corr2 = lanes::to_eigen(corr[2]);
-  corr3 = lanes::to_eigen(corr[3]);
-}
-
 }  // namespace
 
 bool PositionBasedDynamics::solve_DihedralConstraint(
@@ -35,10 +28,7 @@ bool PositionBasedDynamics::solve_DihedralConstraint(
     const Real stiffness, Vector3r& corr0, Vector3r& corr1, Vector3r& corr2, Vector3r& corr3) {
   const auto value = evaluate(p0, p1, p2, p3, restAngle);
   const Real w[4] = {invMass0, invMass1, invMass2, invMass3};
-  lanes::Vec3<Real> corr[4];
-  const bool projected = lanes::project_pbd(value, w, stiffness, corr);
-  write_corrections(corr, corr0, corr1, corr2, corr3);
-  return projected;
+  return detail::project_scalar_pbd<4>(value, w, stiffness, {&corr0, &corr1, &corr2, &corr3});
 }
 
 bool XPBD::solve_DihedralConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
@@ -49,10 +39,8 @@ bool XPBD::solve_DihedralConstraint(const Vector3r& p0, Real invMass0, const Vec
                                     Vector3r& corr3) {
   const auto value = evaluate(p0, p1, p2, p3, restAngle);
   const Real w[4] = {invMass0, invMass1, invMass2, invMass3};
-  lanes::Vec3<Real> corr[4];
-  const bool projected = lanes::project_xpbd(value, w, compliance, dt, lambda, corr);
-  write_corrections(corr, corr0, corr1, corr2, corr3);
-  return projected;
+  return detail::project_scalar_xpbd<4>(value, w, compliance, dt, lambda,
+                                        {&corr0, &corr1, &corr2, &corr3});
 }
 
 }  // namespace tessera

@@ -4,6 +4,7 @@
 #include <tessera/core/xpbd.hpp>
 
 #include "kernels/distance-inl.h"
+#include "scalar_projection.hpp"
 
 namespace tessera {
 
@@ -17,11 +18,7 @@ bool PositionBasedDynamics::solve_DistanceConstraint(const Vector3r& p0, Real in
   const auto value =
       lanes::distance_constraint<Real>(lanes::from_eigen(p0), lanes::from_eigen(p1), restLength);
   const Real w[2] = {invMass0, invMass1};
-  lanes::Vec3<Real> corr[2];
-  const bool projected = lanes::project_pbd(value, w, stiffness, corr);
-  corr0 = lanes::to_eigen(corr[0]);
-  corr1 = lanes::to_eigen(corr[1]);
-  return projected;
+  return detail::project_scalar_pbd<2>(value, w, stiffness, {&corr0, &corr1});
 }
 
 bool XPBD::solve_DistanceConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
@@ -31,11 +28,7 @@ bool XPBD::solve_DistanceConstraint(const Vector3r& p0, Real invMass0, const Vec
   const auto value =
       lanes::distance_constraint<Real>(lanes::from_eigen(p0), lanes::from_eigen(p1), restLength);
   const Real w[2] = {invMass0, invMass1};
-  lanes::Vec3<Real> corr[2];
-  const bool projected = lanes::project_xpbd(value, w, compliance, dt, lambda, corr);
-  corr0 = lanes::to_eigen(corr[0]);
-  corr1 = lanes::to_eigen(corr[1]);
-  return projected;
+  return detail::project_scalar_xpbd<2>(value, w, compliance, dt, lambda, {&corr0, &corr1});
 }
 
 }  // namespace tessera

@@ -13,6 +13,7 @@
 #include <tessera/core/xpbd.hpp>
 
 #include "kernels/fem-inl.h"
+#include "scalar_projection.hpp"
 
 namespace tessera {
 namespace {
@@ -22,10 +23,7 @@ namespace lanes = HWY_NAMESPACE;
 using Matrix3 = Eigen::Matrix<Real, 3, 3>;
 using Matrix2 = Eigen::Matrix<Real, 2, 2>;
 
-template <int N>
-void write_corrections(const lanes::Vec3<Real> (&result)[N], Vector3r* const (&corr)[N]) {
-  for (int i = 0; i < N; ++i) *corr[i] = lanes::to_eigen(result[i]);
-}
+using detail::write_corrections;
 
 }  // namespace
 

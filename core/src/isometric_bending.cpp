@@ -20,6 +20,7 @@
 
 #include "isometric_bending_factor.hpp"
 #include "kernels/isometric_bending-inl.h"
+#include "scalar_projection.hpp"
 
 namespace tessera {
 namespace {
@@ -63,14 +64,6 @@ lanes::ConstraintValue<Real, 4> evaluate(const Vector3r& p0, const Vector3r& p1,
   return lanes::isometric_bending_constraint<Real>(p, k);
 }
 
-void write_corrections(const lanes::Vec3<Real> (&corr)[4], Vector3r& corr0, Vector3r& corr1,
-                       Vector3r& corr2, Vector3r& corr3) {
-  corr0 = lanes::to_eigen(corr[0]);
-  corr1 = lanes::to_eigen(corr[1]);
-  corr2 = lanes::to_eigen(corr[2]);
-  corr3 = lanes::to_eigen(corr[3]);
-}
-
 }  // namespace
 
 namespace detail {
@@ -98,9 +91,8 @@ bool PositionBasedDynamics::solve_IsometricBendingConstraint(
     Vector3r& corr0, Vector3r& corr1, Vector3r& corr2, Vector3r& corr3) {
   const auto value = evaluate(p0, p1, p2, p3, Q);
   const Real w[4] = {invMass0, invMass1, invMass2, invMass3};
-  lanes::Vec3<Real> corr[4];
-  const bool projected = lanes::project_pbd(value, w, stiffness, corr);
-  write_corrections(corr, corr0, corr1, corr2, corr3);
+  const bool projected =
+      detail::project_scalar_pbd<4>(value, w, stiffness, {&corr0, &corr1, &corr2, &corr3});
   return projected || lanes::bending_is_flat(value);  // flat: satisfied
 }
 
@@ -119,9 +111,8 @@ bool XPBD::solve_IsometricBendingConstraint(const Vector3r& p0, Real invMass0,
                                             Vector3r& corr1, Vector3r& corr2, Vector3r& corr3) {
   const auto value = evaluate(p0, p1, p2, p3, Q);
   const Real w[4] = {invMass0, invMass1, invMass2, invMass3};
-  lanes::Vec3<Real> corr[4];
-  const bool projected = lanes::project_xpbd(value, w, compliance, dt, lambda, corr);
-  write_corrections(corr, corr0, corr1, corr2, corr3);
+  const bool projected = detail::project_scalar_xpbd<4>(value, w, compliance, dt, lambda,
+                                                        {&corr0, &corr1, &corr2, &corr3});
   // Flat: satisfied, λ unchanged (but a bad time step or compliance is still an error).
   return projected || (lanes::bending_is_flat(value) && dt > 0 && compliance >= 0);
 }

@@ -6,6 +6,7 @@
 #include <tessera/core/position_based_dynamics.hpp>
 
 #include "kernels/proximity-inl.h"
+#include "scalar_projection.hpp"
 
 namespace tessera {
 
@@ -18,12 +19,9 @@ template <int N>
 bool project_proximity(const lanes::ConstraintValue<Real, N>& value, const Real (&w)[N],
                        Real compression_stiffness, Real stretch_stiffness,
                        Vector3r* const (&corr)[N]) {
-  const Real stiffness =
-      lanes::proximity_stiffness(value.C, compression_stiffness, stretch_stiffness);
-  lanes::Vec3<Real> lane_corr[N];
-  const bool projected = lanes::project_pbd(value, w, stiffness, lane_corr);
-  for (int i = 0; i < N; ++i) *corr[i] = lanes::to_eigen(lane_corr[i]);
-  return projected;
+  return detail::project_scalar_pbd<N>(
+      value, w, lanes::proximity_stiffness(value.C, compression_stiffness, stretch_stiffness),
+      corr);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <tessera/core/position_based_dynamics.hpp>
 
 #include "kernels/strain-inl.h"
+#include "scalar_projection.hpp"
 
 namespace tessera {
 namespace {
@@ -26,7 +27,7 @@ bool solve_strain(const Vector3r (&position)[Dim + 1], const Real (&inverse_mass
   lanes::Vec3<Real> result[Dim + 1];
   const bool ok = lanes::project_strain<Dim>(p, inverse_mass, m, entries, stiffness,
                                              normalizeStretch, normalizeShear, result);
-  for (int i = 0; i <= Dim; ++i) *corr[i] = lanes::to_eigen(result[i]);
+  detail::write_corrections<Dim + 1>(result, corr);
   return ok;
 }
 

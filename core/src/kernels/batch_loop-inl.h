@@ -6,9 +6,10 @@
 //     project with PBD stiffness or XPBD compliance          (projection-inl.h)
 //     store λ of the active lanes, scatter movable particles (batch-inl.h)
 //
-// Why: the dihedral, volume and isometric bending kernels differ only in their formula and
-// rest data; sharing the loop keeps their gather/project/scatter identical (so an improvement
-// to one is an improvement to all) and keeps each family's file about its formula.
+// Why: the distance, dihedral, volume, isometric bending and the three proximity kernels
+// differ only in their formula, rest data and where their stiffness comes from; sharing the
+// loop keeps their gather/project/scatter identical (so an improvement to one is an
+// improvement to all) and keeps each family's file about its formula.
 #if defined(TESSERA_CORE_KERNELS_BATCH_LOOP_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef TESSERA_CORE_KERNELS_BATCH_LOOP_INL_H_
 #undef TESSERA_CORE_KERNELS_BATCH_LOOP_INL_H_
@@ -36,14 +37,17 @@ struct ProjectionParameters {
 
 /// Projects constraints [begin, end) W at a time. evaluate(positions, i) returns the
 /// ConstraintValue<RealLanes, N> of constraints i .. i+W from their N gathered positions
-/// (rest data of the family is loaded by the caller's lambda at offset i).
-template <int N, class Evaluate>
+/// (rest data of the family is loaded by the caller's lambda at offset i). With stiffness
+/// semantics, stiffness_of(value, i) gives the PBD stiffness of those lanes (a family may
+/// choose it from C, as the proximity families do); compliance semantics use
+/// parameters.compliance and parameters.lambda.
+template <int N, class Evaluate, class StiffnessOf>
 HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
                                          const ConstraintParticles<N>& indices,
                                          const ProjectionParameters& parameters,
                                          std::size_t begin, std::size_t end,
                                          const ProjectionSettings& settings,
-                                         Evaluate&& evaluate) {
+                                         Evaluate&& evaluate, StiffnessOf&& stiffness_of) {
   const RealTag d;
   const std::size_t lanes = hn::Lanes(d);
   const ParticleIndex* slot[N];
@@ -68,11 +72,28 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
       project_xpbd(value, w, hn::LoadU(d, parameters.compliance + i), dt, lambda, corr);
       store_active(lambda, active_count, parameters.lambda + i);
     } else {
-      project_pbd(value, w, hn::LoadU(d, parameters.stiffness + i), corr);
+      project_pbd(value, w, stiffness_of(value, i), corr);
     }
     for (int k = 0; k < N; ++k)
       scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
   }
+}
+
+/// The same loop for a family whose stiffness is one per-constraint array
+/// (parameters.stiffness).
+template <int N, class Evaluate>
+HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
+                                         const ConstraintParticles<N>& indices,
+                                         const ProjectionParameters& parameters,
+                                         std::size_t begin, std::size_t end,
+                                         const ProjectionSettings& settings,
+                                         Evaluate&& evaluate) {
+  const RealTag d;
+  project_constraint_lanes<N>(
+      particles, indices, parameters, begin, end, settings, evaluate,
+      [&](const ConstraintValue<RealLanes, N>&, std::size_t i) {
+        return hn::LoadU(d, parameters.stiffness + i);
+      });
 }
 
 }  // namespace HWY_NAMESPACE

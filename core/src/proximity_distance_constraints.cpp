@@ -1,0 +1,169 @@
+// The three proximity families in SoA batches (point–edge, point–triangle and edge–edge
+// distance; headers edge_point_/triangle_point_/edge_edge_distance_constraints.hpp):
+// validation at the door, then the batched kernel (each family's lane formula in
+// kernels/proximity-inl.h, run by the loop every family shares, kernels/batch_loop-inl.h, with
+// the stiffness chosen by the sign of C), compiled once per SIMD target (Highway
+// foreach_target) and dispatched at run time. Why one file: the families differ only in their
+// formula and particle count, so their builders and entry points are one template each.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "proximity_distance_constraints.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include <tessera/core/edge_edge_distance_constraints.hpp>
+#include <tessera/core/edge_point_distance_constraints.hpp>
+#include <tessera/core/triangle_point_distance_constraints.hpp>
+
+#include "kernels/batch_loop-inl.h"
+#include "kernels/proximity-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace tessera {
+namespace HWY_NAMESPACE {
+
+/// Projects constraints [begin, end) of a proximity batch W at a time (stiffness semantics
+/// only). formula(positions, rest) returns the family's ConstraintValue<RealLanes, N>.
+template <int N, class Constraints, class Formula>
+HWY_INLINE void project_proximity_range(ParticleArrays particles, const Constraints& constraints,
+                                        std::size_t begin, std::size_t end, Formula formula) {
+  const RealTag d;
+  project_constraint_lanes<N>(
+      particles, constraints.particles, ProjectionParameters{nullptr, nullptr, nullptr}, begin,
+      end, ProjectionSettings{},
+      [&](const Vec3<RealLanes> (&x)[N], std::size_t i) {
+        return formula(x, hn::LoadU(d, constraints.rest_distance.data() + i));
+      },
+      [&](const ConstraintValue<RealLanes, N>& value, std::size_t i) {
+        return proximity_stiffness(value.C,
+                                   hn::LoadU(d, constraints.compression_stiffness.data() + i),
+                                   hn::LoadU(d, constraints.stretch_stiffness.data() + i));
+      });
+}
+
+void ProjectEdgePointDistanceConstraints(ParticleArrays particles,
+                                         const EdgePointDistanceConstraints& constraints,
+                                         std::size_t begin, std::size_t end) {
+  project_proximity_range<3>(particles, constraints, begin, end,
+                             [](const Vec3<RealLanes> (&x)[3], RealLanes rest_distance) {
+                               return edge_point_distance_constraint(x[0], x[1], x[2],
+                                                                     rest_distance);
+                             });
+}
+
+void ProjectTrianglePointDistanceConstraints(ParticleArrays particles,
+                                             const TrianglePointDistanceConstraints& constraints,
+                                             std::size_t begin, std::size_t end) {
+  project_proximity_range<4>(particles, constraints, begin, end,
+                             [](const Vec3<RealLanes> (&x)[4], RealLanes rest_distance) {
+                               return triangle_point_distance_constraint(x[0], x[1], x[2], x[3],
+                                                                         rest_distance);
+                             });
+}
+
+void ProjectEdgeEdgeDistanceConstraints(ParticleArrays particles,
+                                        const EdgeEdgeDistanceConstraints& constraints,
+                                        std::size_t begin, std::size_t end) {
+  project_proximity_range<4>(particles, constraints, begin, end,
+                             [](const Vec3<RealLanes> (&x)[4], RealLanes rest_distance) {
+                               return edge_edge_distance_constraint(x[0], x[1], x[2], x[3],
+                                                                    rest_distance);
+                             });
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace tessera
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include "constraint_validation.hpp"
+
+namespace tessera {
+namespace {
+
+/// The builder of every proximity family: N indices, a rest distance (shared or one per
+/// constraint, each ≥ 0) and the compression and stretch stiffness.
+template <int N, class Constraints, class Input>
+Constraints make_proximity_constraints(const Input& input) {
+  const detail::ConstraintValidator validator(Constraints::kFamily, input.particle_count);
+  validator.check_parameter("compression stiffness", input.compression_stiffness);
+  validator.check_parameter("stretch stiffness", input.stretch_stiffness);
+  Constraints result;
+  result.particles = validator.particles<N>(input.particles);
+  const std::size_t n = result.size();
+  const bool per_constraint = !input.rest_distances.empty();
+  if (per_constraint && input.rest_distances.size() != n)
+    validator.fail_input(std::to_string(input.rest_distances.size()) + " rest distances for " +
+                         std::to_string(n) + " constraints");
+  if (!per_constraint) validator.check_parameter("rest distance", input.rest_distance);
+  result.rest_distance = detail::filled(n, input.rest_distance);
+  if (per_constraint) {
+    for (std::size_t c = 0; c < n; ++c) {
+      validator.check_non_negative(c, "rest distance", input.rest_distances[c]);
+      result.rest_distance[c] = input.rest_distances[c];
+    }
+  }
+  result.compression_stiffness = detail::filled(n, input.compression_stiffness);
+  result.stretch_stiffness = detail::filled(n, input.stretch_stiffness);
+  return result;
+}
+
+/// The checks every proximity entry point makes before dispatching: the range and particle
+/// count, and stiffness semantics (the seed has no XPBD form of these families).
+template <class Constraints>
+void check_proximity_projection(ParticleArrays particles, const Constraints& constraints,
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
+  check_projection_range(Constraints::kFamily, begin, end, constraints.size(),
+                         constraints.particles.particle_count, particles);
+  if (settings.semantics != ConstraintSemantics::stiffness)
+    throw InvalidInput(std::string(Constraints::kFamily) +
+                       " constraints: only stiffness semantics are supported (no XPBD form)");
+}
+
+}  // namespace
+
+HWY_EXPORT(ProjectEdgePointDistanceConstraints);
+HWY_EXPORT(ProjectTrianglePointDistanceConstraints);
+HWY_EXPORT(ProjectEdgeEdgeDistanceConstraints);
+
+EdgePointDistanceConstraints make_edge_point_distance_constraints(
+    const EdgePointDistanceConstraintInput& input) {
+  return make_proximity_constraints<3, EdgePointDistanceConstraints>(input);
+}
+
+TrianglePointDistanceConstraints make_triangle_point_distance_constraints(
+    const TrianglePointDistanceConstraintInput& input) {
+  return make_proximity_constraints<4, TrianglePointDistanceConstraints>(input);
+}
+
+EdgeEdgeDistanceConstraints make_edge_edge_distance_constraints(
+    const EdgeEdgeDistanceConstraintInput& input) {
+  return make_proximity_constraints<4, EdgeEdgeDistanceConstraints>(input);
+}
+
+void project_edge_point_distance_constraints(ParticleArrays particles,
+                                             const EdgePointDistanceConstraints& constraints,
+                                             std::size_t begin, std::size_t end,
+                                             const ProjectionSettings& settings) {
+  check_proximity_projection(particles, constraints, begin, end, settings);
+  HWY_DYNAMIC_DISPATCH(ProjectEdgePointDistanceConstraints)(particles, constraints, begin, end);
+}
+
+void project_triangle_point_distance_constraints(
+    ParticleArrays particles, const TrianglePointDistanceConstraints& constraints,
+    std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+  check_proximity_projection(particles, constraints, begin, end, settings);
+  HWY_DYNAMIC_DISPATCH(ProjectTrianglePointDistanceConstraints)(particles, constraints, begin,
+                                                                end);
+}
+
+void project_edge_edge_distance_constraints(ParticleArrays particles,
+                                            const EdgeEdgeDistanceConstraints& constraints,
+                                            std::size_t begin, std::size_t end,
+                                            const ProjectionSettings& settings) {
+  check_proximity_projection(particles, constraints, begin, end, settings);
+  HWY_DYNAMIC_DISPATCH(ProjectEdgeEdgeDistanceConstraints)(particles, constraints, begin, end);
+}
+
+}  // namespace tessera
+#endif  // HWY_ONCE

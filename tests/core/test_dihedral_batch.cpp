@@ -101,35 +101,8 @@ void project_scalar(const test::DisjointConstraintSet<4>& set,
 }
 
 TEST(DihedralBatch, MatchesScalarApiOnEveryTarget) {
-  test::for_each_simd_target([](const std::string&) {
-    for (unsigned seed = 1; seed <= 6; ++seed) {
-      Random random(seed);
-      const std::size_t count = std::size_t(random.integer(1, 300));
-      const auto set = random_set(random, count);
-      DihedralConstraints constraints = build(set, random);
-      const auto [begin, end] = test::random_range(random, count);
-      for (const auto semantics :
-           {ConstraintSemantics::stiffness, ConstraintSemantics::compliance}) {
-        const ProjectionSettings settings{semantics, Real(1) / 120};
-        ParticleState state(set.positions, set.inverse_masses);
-        std::vector<Vector3r> expected = set.positions;
-        std::vector<Real> expected_lambda(count, Real(0.25));
-        std::fill(constraints.lambda.begin(), constraints.lambda.begin() + long(count),
-                  Real(0.25));
-        project_scalar(set, constraints, begin, end, settings, expected, expected_lambda);
-        project_dihedral_constraints(ParticleArrays::of(state), constraints, begin, end,
-                                     settings);
-        EXPECT_TRUE(test::positions_match(state, expected, 10));
-        for (std::size_t c = 0; c < count; ++c) {
-          if (semantics == ConstraintSemantics::compliance && c >= begin && c < end)
-            EXPECT_NEAR(constraints.lambda[c], expected_lambda[c],
-                        test::kBatchTolerance * (1 + std::abs(expected_lambda[c])));
-          else
-            EXPECT_EQ(constraints.lambda[c], Real(0.25)) << "λ outside the range changed";
-        }
-      }
-    }
-  });
+  test::expect_batch_matches_scalar_with_lambda(random_set, build, project_dihedral_constraints,
+                                                project_scalar);
 }
 
 /// Every angle class of the lane atan2: 0, (0, π/4), π/4, (π/4, π/2), π/2, (π/2, π), π, with
@@ -175,36 +148,13 @@ TEST(DihedralBatch, AngleSweepMatchesScalarOnEveryTarget) {
 }
 
 TEST(DihedralBatch, BitwiseReproducibleOnEveryTarget) {
-  test::for_each_simd_target([](const std::string&) {
-    Random random(42);
-    const auto set = random_set(random, 257);
-    DihedralConstraints constraints = build(set, random);
-    ParticleState first(set.positions, set.inverse_masses), second = first;
-    for (int iteration = 0; iteration < 5; ++iteration) {
-      project_dihedral_constraints(ParticleArrays::of(first), constraints, 0, 257, {});
-      project_dihedral_constraints(ParticleArrays::of(second), constraints, 0, 257, {});
-    }
-    EXPECT_TRUE(test::same_bits(first, second));
-  });
+  test::expect_bitwise_reproducible(random_set, build, project_dihedral_constraints);
 }
 
 TEST(DihedralBatch, StaticParticlesAndEmptyRangesAreNotWritten) {
-  Random random(7);
-  const auto set = random_set(random, 100);
-  DihedralConstraints constraints = build(set, random);
-  ParticleState state(set.positions, set.inverse_masses);
-  const ParticleState before = state;
-  project_dihedral_constraints(ParticleArrays::of(state), constraints, 40, 40, {});
-  EXPECT_TRUE(test::same_bits(state, before));
   const ProjectionSettings xpbd{ConstraintSemantics::compliance, Real(0.01)};
-  for (const auto& settings : {ProjectionSettings{}, xpbd})
-    project_dihedral_constraints(ParticleArrays::of(state), constraints, 0, 100, settings);
-  bool moved = false;
-  for (std::size_t i = 0; i < set.positions.size(); ++i) {
-    if (set.inverse_masses[i] == 0) EXPECT_EQ(state.position(i), before.position(i));
-    else moved = moved || state.position(i) != before.position(i);
-  }
-  EXPECT_TRUE(moved);
+  test::expect_static_particles_and_empty_ranges_not_written(
+      random_set, build, project_dihedral_constraints, {ProjectionSettings{}, xpbd}, true);
 }
 
 TEST(DihedralBatch, RepeatedProjectionReachesTheRestAngles) {

@@ -28,80 +28,39 @@ DistanceConstraints build(const test::DisjointConstraintSet<2>& set, Random& ran
   return constraints;
 }
 
+void project_scalar(const test::DisjointConstraintSet<2>& set,
+                    const DistanceConstraints& constraints, std::size_t begin, std::size_t end,
+                    const ProjectionSettings& settings, std::vector<Vector3r>& expected,
+                    std::vector<Real>& expected_lambda) {
+  for (std::size_t c = begin; c < end; ++c) {
+    const ParticleIndex i = set.indices[2 * c], j = set.indices[2 * c + 1];
+    Vector3r corr0, corr1;
+    if (settings.semantics == ConstraintSemantics::stiffness)
+      PositionBasedDynamics::solve_DistanceConstraint(
+          expected[i], set.inverse_masses[i], expected[j], set.inverse_masses[j],
+          constraints.rest_length[c], constraints.stiffness[c], corr0, corr1);
+    else
+      XPBD::solve_DistanceConstraint(expected[i], set.inverse_masses[i], expected[j],
+                                     set.inverse_masses[j], constraints.rest_length[c],
+                                     constraints.compliance[c], settings.dt,
+                                     expected_lambda[c], corr0, corr1);
+    if (set.inverse_masses[i] > 0) expected[i] += corr0;
+    if (set.inverse_masses[j] > 0) expected[j] += corr1;
+  }
+}
+
 TEST(DistanceBatch, MatchesScalarApiOnEveryTarget) {
-  test::for_each_simd_target([](const std::string&) {
-    for (unsigned seed = 1; seed <= 6; ++seed) {
-      Random random(seed);
-      const std::size_t count = std::size_t(random.integer(1, 300));
-      const auto set = random_edges(random, count);
-      DistanceConstraints constraints = build(set, random);
-      const auto [begin, end] = test::random_range(random, count);
-      for (const auto semantics :
-           {ConstraintSemantics::stiffness, ConstraintSemantics::compliance}) {
-        const ProjectionSettings settings{semantics, Real(1) / 120};
-        ParticleState state(set.positions, set.inverse_masses);
-        std::vector<Vector3r> expected = set.positions;
-        std::vector<Real> expected_lambda(count, Real(0.25));
-        std::fill(constraints.lambda.begin(), constraints.lambda.begin() + long(count),
-                  Real(0.25));
-        for (std::size_t c = begin; c < end; ++c) {
-          const ParticleIndex i = set.indices[2 * c], j = set.indices[2 * c + 1];
-          Vector3r corr0, corr1;
-          if (semantics == ConstraintSemantics::stiffness)
-            PositionBasedDynamics::solve_DistanceConstraint(
-                expected[i], set.inverse_masses[i], expected[j], set.inverse_masses[j],
-                constraints.rest_length[c], constraints.stiffness[c], corr0, corr1);
-          else
-            XPBD::solve_DistanceConstraint(expected[i], set.inverse_masses[i], expected[j],
-                                           set.inverse_masses[j], constraints.rest_length[c],
-                                           constraints.compliance[c], settings.dt,
-                                           expected_lambda[c], corr0, corr1);
-          if (set.inverse_masses[i] > 0) expected[i] += corr0;
-          if (set.inverse_masses[j] > 0) expected[j] += corr1;
-        }
-        project_distance_constraints(ParticleArrays::of(state), constraints, begin, end,
-                                     settings);
-        EXPECT_TRUE(test::positions_match(state, expected, 10));
-        for (std::size_t c = 0; c < count; ++c) {
-          if (semantics == ConstraintSemantics::compliance && c >= begin && c < end)
-            EXPECT_NEAR(constraints.lambda[c], expected_lambda[c],
-                        test::kBatchTolerance * (1 + std::abs(expected_lambda[c])));
-          else
-            EXPECT_EQ(constraints.lambda[c], Real(0.25)) << "λ outside the range changed";
-        }
-      }
-    }
-  });
+  test::expect_batch_matches_scalar_with_lambda(random_edges, build, project_distance_constraints,
+                                                project_scalar);
 }
 
 TEST(DistanceBatch, BitwiseReproducibleOnEveryTarget) {
-  test::for_each_simd_target([](const std::string&) {
-    Random random(42);
-    const auto set = random_edges(random, 257);
-    DistanceConstraints constraints = build(set, random);
-    ParticleState first(set.positions, set.inverse_masses), second = first;
-    for (int iteration = 0; iteration < 5; ++iteration) {
-      project_distance_constraints(ParticleArrays::of(first), constraints, 0, 257, {});
-      project_distance_constraints(ParticleArrays::of(second), constraints, 0, 257, {});
-    }
-    EXPECT_TRUE(test::same_bits(first, second));
-  });
+  test::expect_bitwise_reproducible(random_edges, build, project_distance_constraints);
 }
 
 TEST(DistanceBatch, StaticParticlesAndEmptyRangesAreNotWritten) {
-  Random random(7);
-  const auto set = random_edges(random, 100);
-  DistanceConstraints constraints = build(set, random);
-  ParticleState state(set.positions, set.inverse_masses);
-  const ParticleState before = state;
-  project_distance_constraints(ParticleArrays::of(state), constraints, 40, 40, {});
-  EXPECT_TRUE(test::same_bits(state, before));
-  project_distance_constraints(ParticleArrays::of(state), constraints, 0, 100, {});
-  for (std::size_t i = 0; i < set.positions.size(); ++i) {
-    if (set.inverse_masses[i] == 0) {
-      EXPECT_EQ(state.position(i), before.position(i)) << "static particle " << i << " moved";
-    }
-  }
+  test::expect_static_particles_and_empty_ranges_not_written(
+      random_edges, build, project_distance_constraints, {ProjectionSettings{}}, false);
 }
 
 TEST(DistanceBatch, AllTargetsAvailableIncludeThePortableFallback) {

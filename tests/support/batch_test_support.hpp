@@ -9,10 +9,12 @@
 
 #include <algorithm>
 #include <functional>
+#include <initializer_list>
 #include <numeric>
 #include <string>
 #include <vector>
 
+#include <tessera/core/constraint_batch.hpp>
 #include <tessera/core/particle_state.hpp>
 #include <tessera/core/simd.hpp>
 
@@ -126,6 +128,99 @@ inline ::testing::AssertionResult positions_match(const ParticleState& state,
 /// Bitwise equality of two particle states' positions.
 inline bool same_bits(const ParticleState& a, const ParticleState& b) {
   return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+
+// ------------------------------------------------------------ the tests every family repeats
+//
+// The families' batch tests share their structure; these run it for a family given
+//   make_set(random, count) -> DisjointConstraintSet<N>   (the family's random constraints)
+//   build(set, random)      -> the family's batch          (make_<family>_constraints)
+//   project(particles, constraints, begin, end, settings)  (project_<family>_constraints)
+
+/// Batch against the scalar API for a family with both semantics (PBD stiffness and XPBD
+/// compliance with λ), on every SIMD target, for seeds 1..6 of 1..300 constraints projected
+/// over a random range from λ = 0.25: positions match scalar(set, constraints, begin, end,
+/// settings, expected, expected_lambda) (which projects the range constraint by constraint
+/// into expected and expected_lambda); λ inside the range matches the scalar λ under
+/// compliance, and every other λ is untouched.
+template <class MakeSet, class Build, class Project, class Scalar>
+void expect_batch_matches_scalar_with_lambda(MakeSet&& make_set, Build&& build,
+                                             Project&& project, Scalar&& scalar) {
+  for_each_simd_target([&](const std::string&) {
+    for (unsigned seed = 1; seed <= 6; ++seed) {
+      Random random(seed);
+      const std::size_t count = std::size_t(random.integer(1, 300));
+      const auto set = make_set(random, count);
+      auto constraints = build(set, random);
+      const auto [begin, end] = random_range(random, count);
+      for (const auto semantics :
+           {ConstraintSemantics::stiffness, ConstraintSemantics::compliance}) {
+        const ProjectionSettings settings{semantics, Real(1) / 120};
+        ParticleState state(set.positions, set.inverse_masses);
+        std::vector<Vector3r> expected = set.positions;
+        std::vector<Real> expected_lambda(count, Real(0.25));
+        std::fill(constraints.lambda.begin(), constraints.lambda.begin() + long(count),
+                  Real(0.25));
+        scalar(set, constraints, begin, end, settings, expected, expected_lambda);
+        project(ParticleArrays::of(state), constraints, begin, end, settings);
+        EXPECT_TRUE(positions_match(state, expected, 10));
+        for (std::size_t c = 0; c < count; ++c) {
+          if (semantics == ConstraintSemantics::compliance && c >= begin && c < end) {
+            EXPECT_NEAR(constraints.lambda[c], expected_lambda[c],
+                        kBatchTolerance * (1 + std::abs(expected_lambda[c])));
+          } else {
+            EXPECT_EQ(constraints.lambda[c], Real(0.25)) << "λ outside the range changed";
+          }
+        }
+      }
+    }
+  });
+}
+
+/// Two states projected the same way five times over 257 constraints (seed 42) stay bitwise
+/// equal, on every SIMD target.
+template <class MakeSet, class Build, class Project>
+void expect_bitwise_reproducible(MakeSet&& make_set, Build&& build, Project&& project) {
+  for_each_simd_target([&](const std::string&) {
+    Random random(42);
+    const auto set = make_set(random, 257);
+    auto constraints = build(set, random);
+    ParticleState first(set.positions, set.inverse_masses), second = first;
+    for (int iteration = 0; iteration < 5; ++iteration) {
+      project(ParticleArrays::of(first), constraints, 0, 257, ProjectionSettings{});
+      project(ParticleArrays::of(second), constraints, 0, 257, ProjectionSettings{});
+    }
+    EXPECT_TRUE(same_bits(first, second));
+  });
+}
+
+/// Over 100 constraints (seed 7): an empty range writes nothing; projecting them all with each
+/// of `settings` in turn never moves a static particle, and (with expect_movement) does move
+/// some movable one.
+template <class MakeSet, class Build, class Project>
+void expect_static_particles_and_empty_ranges_not_written(
+    MakeSet&& make_set, Build&& build, Project&& project,
+    std::initializer_list<ProjectionSettings> settings, bool expect_movement) {
+  Random random(7);
+  const auto set = make_set(random, 100);
+  auto constraints = build(set, random);
+  ParticleState state(set.positions, set.inverse_masses);
+  const ParticleState before = state;
+  project(ParticleArrays::of(state), constraints, 40, 40, ProjectionSettings{});
+  EXPECT_TRUE(same_bits(state, before));
+  for (const ProjectionSettings& s : settings)
+    project(ParticleArrays::of(state), constraints, 0, 100, s);
+  bool moved = false;
+  for (std::size_t i = 0; i < set.positions.size(); ++i) {
+    if (set.inverse_masses[i] == 0) {
+      EXPECT_EQ(state.position(i), before.position(i)) << "static particle " << i << " moved";
+    } else {
+      moved = moved || state.position(i) != before.position(i);
+    }
+  }
+  if (expect_movement) {
+    EXPECT_TRUE(moved);
+  }
 }
 
 }  // namespace tessera::test

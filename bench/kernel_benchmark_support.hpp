@@ -18,8 +18,10 @@
 #include <numeric>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include <tessera/core/constraint_batch.hpp>
 #include <tessera/core/particle_state.hpp>
 
 namespace tessera::bench {
@@ -82,6 +84,47 @@ inline void register_kernel_benchmark(const std::string& family, const std::stri
                                      std::int64_t(kKernelBenchmarkConstraints));
                                })
       ->Unit(benchmark::kMicrosecond);
+}
+
+/// Registers the three benchmarks of a family: kernel/<family>/scalar runs `scalar`,
+/// kernel/<family>/batch and .../batch_sorted run `batch(state, sorted)`.
+inline void register_kernel_benchmarks(const std::string& family,
+                                       std::function<void(benchmark::State&)> scalar,
+                                       std::function<void(benchmark::State&, bool)> batch) {
+  register_kernel_benchmark(family, "scalar", std::move(scalar));
+  register_kernel_benchmark(family, "batch", [batch](benchmark::State& s) { batch(s, false); });
+  register_kernel_benchmark(family, "batch_sorted",
+                            [batch](benchmark::State& s) { batch(s, true); });
+}
+
+/// The classic per-constraint PBD loop over an AoS copy of the scene, one sweep per
+/// iteration: solve(x, w, i, c, corr) projects constraint c (particles i[0..N)) through the
+/// scalar API, and its corrections are applied when it returns true.
+template <int N, class Solve>
+void run_scalar_sweeps(benchmark::State& state, const KernelScene<N>& scene, Solve&& solve) {
+  std::vector<Vector3r> x = scene.current;
+  const std::vector<Real>& w = scene.inverse_mass;
+  for (auto _ : state) {
+    for (std::size_t c = 0; c < scene.count; ++c) {
+      const ParticleIndex* i = &scene.indices[N * c];
+      Vector3r corr[N];
+      if (solve(x, w, i, c, corr))
+        for (int k = 0; k < N; ++k) x[i[k]] += corr[k];
+    }
+    benchmark::ClobberMemory();
+  }
+}
+
+/// The batched kernel over the whole scene, one sweep per iteration, with default settings:
+/// project(particles, constraints, begin, end, settings) is project_<family>_constraints.
+template <int N, class Constraints, class Project>
+void run_batch_sweeps(benchmark::State& state, const KernelScene<N>& scene,
+                      Constraints constraints, Project&& project) {
+  ParticleState particles(scene.current, scene.inverse_mass);
+  for (auto _ : state) {
+    project(ParticleArrays::of(particles), constraints, 0, scene.count, ProjectionSettings{});
+    benchmark::ClobberMemory();
+  }
 }
 
 }  // namespace tessera::bench

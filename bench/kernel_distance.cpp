@@ -20,36 +20,21 @@ void scalar(benchmark::State& state) {
   std::vector<Real> rest_length(scene.count);
   for (std::size_t c = 0; c < scene.count; ++c)
     rest_length[c] = (scene.rest[scene.indices[2 * c]] - scene.rest[scene.indices[2 * c + 1]]).norm();
-  std::vector<Vector3r> x = scene.current;
-  const std::vector<Real>& w = scene.inverse_mass;
-  for (auto _ : state) {
-    for (std::size_t c = 0; c < scene.count; ++c) {
-      const ParticleIndex i = scene.indices[2 * c], j = scene.indices[2 * c + 1];
-      Vector3r corr0, corr1;
-      if (PositionBasedDynamics::solve_DistanceConstraint(x[i], w[i], x[j], w[j], rest_length[c],
-                                                          1, corr0, corr1)) {
-        x[i] += corr0;
-        x[j] += corr1;
-      }
-    }
-    benchmark::ClobberMemory();
-  }
+  run_scalar_sweeps<2>(state, scene, [&](auto& x, const auto& w, const ParticleIndex* i,
+                                         std::size_t c, Vector3r(&corr)[2]) {
+    return PositionBasedDynamics::solve_DistanceConstraint(x[i[0]], w[i[0]], x[i[1]], w[i[1]],
+                                                           rest_length[c], 1, corr[0], corr[1]);
+  });
 }
 
 void batch(benchmark::State& state, bool sorted) {
   const KernelScene<2> scene = distance_scene(sorted);
-  DistanceConstraints constraints = make_distance_constraints({scene.indices, scene.rest});
-  ParticleState particles(scene.current, scene.inverse_mass);
-  for (auto _ : state) {
-    project_distance_constraints(ParticleArrays::of(particles), constraints, 0, scene.count, {});
-    benchmark::ClobberMemory();
-  }
+  run_batch_sweeps(state, scene, make_distance_constraints({scene.indices, scene.rest}),
+                   project_distance_constraints);
 }
 
 const bool registered = [] {
-  register_kernel_benchmark("distance", "scalar", scalar);
-  register_kernel_benchmark("distance", "batch", [](benchmark::State& s) { batch(s, false); });
-  register_kernel_benchmark("distance", "batch_sorted", [](benchmark::State& s) { batch(s, true); });
+  register_kernel_benchmarks("distance", scalar, batch);
   return true;
 }();
 

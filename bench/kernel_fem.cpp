@@ -147,11 +147,7 @@ void tetra_batch(benchmark::State& state, bool sorted, bool xpbd, bool inverted)
 }
 
 const bool registered = [] {
-  register_kernel_benchmark("fem_triangle", "scalar", triangle_scalar);
-  register_kernel_benchmark("fem_triangle", "batch",
-                            [](benchmark::State& s) { triangle_batch(s, false); });
-  register_kernel_benchmark("fem_triangle", "batch_sorted",
-                            [](benchmark::State& s) { triangle_batch(s, true); });
+  register_kernel_benchmarks("fem_triangle", triangle_scalar, triangle_batch);
   register_kernel_benchmark("fem_tetra", "scalar",
                             [](benchmark::State& s) { tetra_scalar(s, false); });
   register_kernel_benchmark("fem_tetra", "batch",

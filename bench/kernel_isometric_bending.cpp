@@ -28,39 +28,23 @@ void scalar(benchmark::State& state) {
       make_isometric_bending_constraints({scene.indices, scene.rest});
   std::vector<Matrix4r> Q(scene.count);
   for (std::size_t c = 0; c < scene.count; ++c) Q[c] = constraints.matrix(c);
-  std::vector<Vector3r> x = scene.current;
-  const std::vector<Real>& w = scene.inverse_mass;
-  for (auto _ : state) {
-    for (std::size_t c = 0; c < scene.count; ++c) {
-      const ParticleIndex* i = &scene.indices[4 * c];
-      Vector3r corr[4];
-      if (PositionBasedDynamics::solve_IsometricBendingConstraint(
-              x[i[0]], w[i[0]], x[i[1]], w[i[1]], x[i[2]], w[i[2]], x[i[3]], w[i[3]], Q[c], 1,
-              corr[0], corr[1], corr[2], corr[3]))
-        for (int k = 0; k < 4; ++k) x[i[k]] += corr[k];
-    }
-    benchmark::ClobberMemory();
-  }
+  run_scalar_sweeps<4>(state, scene, [&](auto& x, const auto& w, const ParticleIndex* i,
+                                         std::size_t c, Vector3r(&corr)[4]) {
+    return PositionBasedDynamics::solve_IsometricBendingConstraint(
+        x[i[0]], w[i[0]], x[i[1]], w[i[1]], x[i[2]], w[i[2]], x[i[3]], w[i[3]], Q[c], 1,
+        corr[0], corr[1], corr[2], corr[3]);
+  });
 }
 
 void batch(benchmark::State& state, bool sorted) {
   const KernelScene<4> scene = bending_scene(sorted);
-  IsometricBendingConstraints constraints =
-      make_isometric_bending_constraints({scene.indices, scene.rest});
-  ParticleState particles(scene.current, scene.inverse_mass);
-  for (auto _ : state) {
-    project_isometric_bending_constraints(ParticleArrays::of(particles), constraints, 0,
-                                          scene.count, {});
-    benchmark::ClobberMemory();
-  }
+  run_batch_sweeps(state, scene,
+                   make_isometric_bending_constraints({scene.indices, scene.rest}),
+                   project_isometric_bending_constraints);
 }
 
 const bool registered = [] {
-  register_kernel_benchmark("isometric_bending", "scalar", scalar);
-  register_kernel_benchmark("isometric_bending", "batch",
-                            [](benchmark::State& s) { batch(s, false); });
-  register_kernel_benchmark("isometric_bending", "batch_sorted",
-                            [](benchmark::State& s) { batch(s, true); });
+  register_kernel_benchmarks("isometric_bending", scalar, batch);
   return true;
 }();
 

@@ -76,11 +76,7 @@ void batch(benchmark::State& state, bool sorted) {
 }
 
 const bool registered = [] {
-  register_kernel_benchmark("particle_tet_contact", "scalar", scalar);
-  register_kernel_benchmark("particle_tet_contact", "batch",
-                            [](benchmark::State& s) { batch(s, false); });
-  register_kernel_benchmark("particle_tet_contact", "batch_sorted",
-                            [](benchmark::State& s) { batch(s, true); });
+  register_kernel_benchmarks("particle_tet_contact", scalar, batch);
   return true;
 }();
 

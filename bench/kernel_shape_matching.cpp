@@ -115,11 +115,7 @@ void batch(benchmark::State& state, bool sorted) {
 }
 
 const bool registered = [] {
-  register_kernel_benchmark("shape_matching", "scalar", scalar);
-  register_kernel_benchmark("shape_matching", "batch",
-                            [](benchmark::State& s) { batch(s, false); });
-  register_kernel_benchmark("shape_matching", "batch_sorted",
-                            [](benchmark::State& s) { batch(s, true); });
+  register_kernel_benchmarks("shape_matching", scalar, batch);
   return true;
 }();
 

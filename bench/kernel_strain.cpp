@@ -116,16 +116,8 @@ void tetra_batch(benchmark::State& state, bool sorted) {
 }
 
 const bool registered = [] {
-  register_kernel_benchmark("strain_triangle", "scalar", triangle_scalar);
-  register_kernel_benchmark("strain_triangle", "batch",
-                            [](benchmark::State& s) { triangle_batch(s, false); });
-  register_kernel_benchmark("strain_triangle", "batch_sorted",
-                            [](benchmark::State& s) { triangle_batch(s, true); });
-  register_kernel_benchmark("strain_tetra", "scalar", tetra_scalar);
-  register_kernel_benchmark("strain_tetra", "batch",
-                            [](benchmark::State& s) { tetra_batch(s, false); });
-  register_kernel_benchmark("strain_tetra", "batch_sorted",
-                            [](benchmark::State& s) { tetra_batch(s, true); });
+  register_kernel_benchmarks("strain_triangle", triangle_scalar, triangle_batch);
+  register_kernel_benchmarks("strain_tetra", tetra_scalar, tetra_batch);
   return true;
 }();
 

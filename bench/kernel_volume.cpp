@@ -30,35 +30,22 @@ void scalar(benchmark::State& state) {
   const VolumeConstraints constraints = make_volume_constraints({scene.indices, scene.rest});
   std::vector<Real> rest_volume(constraints.rest_volume.begin(),
                                 constraints.rest_volume.begin() + long(scene.count));
-  std::vector<Vector3r> x = scene.current;
-  const std::vector<Real>& w = scene.inverse_mass;
-  for (auto _ : state) {
-    for (std::size_t c = 0; c < scene.count; ++c) {
-      const ParticleIndex* i = &scene.indices[4 * c];
-      Vector3r corr[4];
-      if (PositionBasedDynamics::solve_VolumeConstraint(
-              x[i[0]], w[i[0]], x[i[1]], w[i[1]], x[i[2]], w[i[2]], x[i[3]], w[i[3]],
-              rest_volume[c], 1, corr[0], corr[1], corr[2], corr[3]))
-        for (int k = 0; k < 4; ++k) x[i[k]] += corr[k];
-    }
-    benchmark::ClobberMemory();
-  }
+  run_scalar_sweeps<4>(state, scene, [&](auto& x, const auto& w, const ParticleIndex* i,
+                                         std::size_t c, Vector3r(&corr)[4]) {
+    return PositionBasedDynamics::solve_VolumeConstraint(
+        x[i[0]], w[i[0]], x[i[1]], w[i[1]], x[i[2]], w[i[2]], x[i[3]], w[i[3]], rest_volume[c],
+        1, corr[0], corr[1], corr[2], corr[3]);
+  });
 }
 
 void batch(benchmark::State& state, bool sorted) {
   const KernelScene<4> scene = volume_scene(sorted);
-  VolumeConstraints constraints = make_volume_constraints({scene.indices, scene.rest});
-  ParticleState particles(scene.current, scene.inverse_mass);
-  for (auto _ : state) {
-    project_volume_constraints(ParticleArrays::of(particles), constraints, 0, scene.count, {});
-    benchmark::ClobberMemory();
-  }
+  run_batch_sweeps(state, scene, make_volume_constraints({scene.indices, scene.rest}),
+                   project_volume_constraints);
 }
 
 const bool registered = [] {
-  register_kernel_benchmark("volume", "scalar", scalar);
-  register_kernel_benchmark("volume", "batch", [](benchmark::State& s) { batch(s, false); });
-  register_kernel_benchmark("volume", "batch_sorted", [](benchmark::State& s) { batch(s, true); });
+  register_kernel_benchmarks("volume", scalar, batch);
   return true;
 }();
 

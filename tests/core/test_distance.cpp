@@ -226,27 +226,6 @@ TEST(XPBDDistanceConstraint, StaticParticleIsNeverMoved) {
   EXPECT_GT(r.corr[0].y(), 0);
 }
 
-
-/// Inverse masses for the near-degenerate checks: about one in four static.
-template <std::size_t N>
-std::array<Real, N> masses_with_static(Random& random) {
-  std::array<Real, N> w;
-  for (Real& m : w) m = random.integer(0, 3) == 0 ? Real(0) : random.inverse_mass();
-  return w;
-}
-
-constexpr std::array<Real, 6> kNearDegenerateScales = {0, Real(1e-9), Real(1e-7), Real(1e-5),
-                                                       Real(1e-3), Real(1e-1)};
-
-/// Finite corrections, and all of them zero when the kernel reports false.
-template <std::size_t N>
-::testing::AssertionResult finite_or_rejected(bool ok, const std::array<Vector3r, N>& corr) {
-  if (!all_finite(corr)) return all_finite(corr);
-  if (!ok && max_norm(corr) != 0)
-    return ::testing::AssertionFailure() << "false with a non-zero correction";
-  return ::testing::AssertionSuccess();
-}
-
 TEST(DistanceConstraint, NearDegenerateInputStaysFinite) {
   Random random(106);
   for (int trial = 0; trial < 300; ++trial) {

@@ -206,4 +206,39 @@ std::array<Vector3r, N> near_degenerate_points(Random& random, int pattern, Real
   return x;
 }
 
+/// Inverse masses for the near-degenerate checks: about one in four static.
+template <std::size_t N>
+std::array<Real, N> masses_with_static(Random& random) {
+  std::array<Real, N> w;
+  for (Real& m : w) m = random.integer(0, 3) == 0 ? Real(0) : random.inverse_mass();
+  return w;
+}
+
+inline constexpr std::array<Real, 6> kNearDegenerateScales = {
+    0, Real(1e-9), Real(1e-7), Real(1e-5), Real(1e-3), Real(1e-1)};
+
+/// Finite corrections, and all of them zero when the kernel reports false.
+template <std::size_t N>
+::testing::AssertionResult finite_or_rejected(bool ok, const std::array<Vector3r, N>& corr) {
+  if (!all_finite(corr)) return all_finite(corr);
+  if (!ok && max_norm(corr) != 0)
+    return ::testing::AssertionFailure() << "false with a non-zero correction";
+  return ::testing::AssertionSuccess();
+}
+
+/// A PBD correction of a constraint with value C = f(x) - rest is Δp_i = -s w_i ∇_i C with
+/// s = stiffness · C / Σ_j w_j |∇_j C|²: checks that corr lies along the weighted gradient of
+/// f (central differences) and that its step length is that s.
+template <std::size_t N, class F>
+void expect_pbd_step(F&& f, const std::array<Vector3r, N>& x, const std::array<Real, N>& w,
+                     const std::array<Vector3r, N>& corr, Real C, Real stiffness) {
+  const auto grad = numeric_gradient<int(N)>(f, x);
+  Real fitted = 0;
+  EXPECT_TRUE(along_weighted_gradient(corr, w, grad, kFiniteDifferenceTolerance, &fitted));
+  Real weighted = 0;
+  for (std::size_t i = 0; i < N; ++i) weighted += w[i] * grad[i].squaredNorm();
+  const Real expected = stiffness * C / weighted;
+  EXPECT_NEAR(fitted, expected, kFiniteDifferenceTolerance * std::abs(expected) + kRoundOff);
+}
+
 }  // namespace tessera::test

@@ -21,13 +21,11 @@ void ConstraintValidator::fail_repeated(std::size_t constraint, ParticleIndex in
   fail(constraint, "particle " + std::to_string(index) + " appears twice");
 }
 
-namespace {
 std::string describe(Real value) {
   std::ostringstream text;
   text << value;
   return text.str();
 }
-}  // namespace
 
 void ConstraintValidator::check_finite(std::size_t constraint, const char* what,
                                        Real value) const {

@@ -4,6 +4,7 @@
 //   "distance constraint 17: particle index 99 is out of range (50 particles)".
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <span>
@@ -58,6 +59,19 @@ class ConstraintValidator {
     return result;
   }
 
+  /// The rest positions of constraint c's N particles, each checked to be finite.
+  template <int N>
+  std::array<Vector3r, N> rest_points(const ConstraintParticles<N>& particles,
+                                      std::span<const Vector3r> rest_positions,
+                                      std::size_t c) const {
+    std::array<Vector3r, N> p;
+    for (std::size_t k = 0; k < std::size_t(N); ++k) {
+      p[k] = rest_positions[particles.particle[k][c]];
+      if (!p[k].allFinite()) fail(c, "rest position is not finite");
+    }
+    return p;
+  }
+
   void check_index(std::size_t constraint, ParticleIndex index) const {
     if (index >= particle_count_) fail_out_of_range(constraint, index);
   }
@@ -68,6 +82,9 @@ class ConstraintValidator {
   std::string family_;
   std::size_t particle_count_;
 };
+
+/// A value as the validation messages print it (e.g. "-1", "nan", "inf").
+std::string describe(Real value);
 
 /// A padded copy of n values all equal to value.
 inline AlignedVector<Real> filled(std::size_t n, Real value) {

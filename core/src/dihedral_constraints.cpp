@@ -52,11 +52,7 @@ DihedralConstraints make_dihedral_constraints(const DihedralConstraintInput& inp
   result.rest_angle = detail::filled(n, 0);
   const Real tolerance_squared = kDegenerateTolerance * kDegenerateTolerance;
   for (std::size_t c = 0; c < n; ++c) {
-    Vector3r p[4];
-    for (std::size_t k = 0; k < 4; ++k) {
-      p[k] = input.rest_positions[result.particles.particle[k][c]];
-      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
-    }
+    const auto p = validator.rest_points<4>(result.particles, input.rest_positions, c);
     // The constraint's own degenerate cases, named.
     if (!((p[3] - p[2]).squaredNorm() > tolerance_squared))
       validator.fail(c, "degenerate rest stencil: shared edge p2-p3 has zero length");

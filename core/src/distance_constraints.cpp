@@ -49,9 +49,7 @@ DistanceConstraints make_distance_constraints(const DistanceConstraintInput& inp
   const std::size_t n = result.size();
   result.rest_length = detail::filled(n, 0);
   for (std::size_t c = 0; c < n; ++c) {
-    const Vector3r& p0 = input.rest_positions[result.particles.particle[0][c]];
-    const Vector3r& p1 = input.rest_positions[result.particles.particle[1][c]];
-    if (!p0.allFinite() || !p1.allFinite()) validator.fail(c, "rest position is not finite");
+    const auto [p0, p1] = validator.rest_points<2>(result.particles, input.rest_positions, c);
     const Real length = (p0 - p1).norm();
     if (!(length > kDegenerateTolerance))
       validator.fail(c, "rest length is 0 (particles " +

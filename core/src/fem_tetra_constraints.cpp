@@ -86,7 +86,6 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 #include <cmath>
-#include <sstream>
 #include <string>
 
 #include <tessera/core/position_based_dynamics.hpp>
@@ -94,26 +93,16 @@ HWY_AFTER_NAMESPACE();
 #include "constraint_validation.hpp"
 
 namespace tessera {
-namespace {
-
-std::string describe(Real value) {
-  std::ostringstream text;
-  text << value;
-  return text.str();
-}
-
-}  // namespace
-
 HWY_EXPORT(ProjectFEMTetraConstraints);
 
 FEMTetraConstraints make_fem_tetra_constraints(const FEMTetraConstraintInput& input) {
   const detail::ConstraintValidator validator(FEMTetraConstraints::kFamily,
                                               input.rest_positions.size());
   if (!std::isfinite(input.youngs_modulus) || !(input.youngs_modulus > 0))
-    validator.fail_input("Young's modulus is " + describe(input.youngs_modulus) +
+    validator.fail_input("Young's modulus is " + detail::describe(input.youngs_modulus) +
                          ", must be finite and > 0");
   if (!(input.poisson_ratio > -1 && input.poisson_ratio < Real(0.5)))
-    validator.fail_input("Poisson ratio is " + describe(input.poisson_ratio) +
+    validator.fail_input("Poisson ratio is " + detail::describe(input.poisson_ratio) +
                          ", must lie in (-1, 0.5)");
   FEMTetraConstraints result;
   result.particles = validator.particles<4>(input.particles);
@@ -121,11 +110,7 @@ FEMTetraConstraints make_fem_tetra_constraints(const FEMTetraConstraintInput& in
   result.volume = detail::filled(n, 0);
   for (auto& entry : result.rest_inverse) entry = detail::filled(n, 0);
   for (std::size_t c = 0; c < n; ++c) {
-    Vector3r p[4];
-    for (int k = 0; k < 4; ++k) {
-      p[k] = input.rest_positions[result.particles.particle[std::size_t(k)][c]];
-      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
-    }
+    const auto p = validator.rest_points<4>(result.particles, input.rest_positions, c);
     Real volume;
     Matrix3r rest_inverse;
     if (!PositionBasedDynamics::init_FEMTetraConstraint(p[0], p[1], p[2], p[3], volume,

@@ -91,11 +91,7 @@ FEMTriangleConstraints make_fem_triangle_constraints(const FEMTriangleConstraint
   result.area = detail::filled(n, 0);
   for (auto& entry : result.rest_inverse) entry = detail::filled(n, 0);
   for (std::size_t c = 0; c < n; ++c) {
-    Vector3r p[3];
-    for (int k = 0; k < 3; ++k) {
-      p[k] = input.rest_positions[result.particles.particle[std::size_t(k)][c]];
-      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
-    }
+    const auto p = validator.rest_points<3>(result.particles, input.rest_positions, c);
     Real area;
     Matrix2r rest_inverse;
     if (!PositionBasedDynamics::init_FEMTriangleConstraint(p[0], p[1], p[2], area, rest_inverse))

@@ -64,11 +64,7 @@ IsometricBendingConstraints make_isometric_bending_constraints(
   const std::size_t n = result.size();
   for (auto& entries : result.factor) entries = detail::filled(n, 0);
   for (std::size_t c = 0; c < n; ++c) {
-    Vector3r p[4];
-    for (std::size_t k = 0; k < 4; ++k) {
-      p[k] = input.rest_positions[result.particles.particle[k][c]];
-      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
-    }
+    const auto p = validator.rest_points<4>(result.particles, input.rest_positions, c);
     // init_IsometricBendingConstraint's degenerate cases, named.
     if (!((p[3] - p[2]).norm() > kDegenerateTolerance))
       validator.fail(c, "degenerate rest stencil: shared edge p2-p3 has zero length");

@@ -98,11 +98,7 @@ StrainTetraConstraints make_strain_tetra_constraints(const StrainTetraConstraint
   const std::size_t n = result.size();
   for (auto& entry : result.rest_inverse) entry = detail::filled(n, 0);
   for (std::size_t c = 0; c < n; ++c) {
-    Vector3r p[4];
-    for (int k = 0; k < 4; ++k) {
-      p[k] = input.rest_positions[result.particles.particle[std::size_t(k)][c]];
-      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
-    }
+    const auto p = validator.rest_points<4>(result.particles, input.rest_positions, c);
     Matrix3r rest_inverse;
     if (!PositionBasedDynamics::init_StrainTetraConstraint(p[0], p[1], p[2], p[3],
                                                            rest_inverse))

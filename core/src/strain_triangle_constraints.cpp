@@ -92,11 +92,7 @@ StrainTriangleConstraints make_strain_triangle_constraints(
   const std::size_t n = result.size();
   for (auto& entry : result.rest_inverse) entry = detail::filled(n, 0);
   for (std::size_t c = 0; c < n; ++c) {
-    Vector3r p[3];
-    for (int k = 0; k < 3; ++k) {
-      p[k] = input.rest_positions[result.particles.particle[std::size_t(k)][c]];
-      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
-    }
+    const auto p = validator.rest_points<3>(result.particles, input.rest_positions, c);
     Matrix2r rest_inverse;
     if (!PositionBasedDynamics::init_StrainTriangleConstraint(p[0], p[1], p[2], rest_inverse))
       validator.fail(c, "rest triangle has zero area in the xy plane");

@@ -54,11 +54,7 @@ VolumeConstraints make_volume_constraints(const VolumeConstraintInput& input) {
   const std::size_t n = result.size();
   result.rest_volume = detail::filled(n, 0);
   for (std::size_t c = 0; c < n; ++c) {
-    Vector3r p[4];
-    for (std::size_t k = 0; k < 4; ++k) {
-      p[k] = input.rest_positions[result.particles.particle[k][c]];
-      if (!p[k].allFinite()) validator.fail(c, "rest position is not finite");
-    }
+    const auto p = validator.rest_points<4>(result.particles, input.rest_positions, c);
     // V0 is C at rest for V0 = 0, evaluated by the formula every projection uses.
     const Real volume = lanes::volume_constraint<Real>(
                             lanes::from_eigen(p[0]), lanes::from_eigen(p[1]),

@@ -25,7 +25,7 @@ HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
   const RealTag d;
   const std::size_t lanes = hn::Lanes(d);
   const ParticleIndex* slot[4];
-  for (int k = 0; k < 4; ++k) slot[k] = constraints.particles.particle[std::size_t(k)].data();
+  constraint_slots(constraints.particles, slot);
   const RealLanes dt = hn::Set(d, time_step);
   for (std::size_t i = begin; i < end; i += lanes) {
     const std::size_t active_count = end - i;
@@ -33,11 +33,7 @@ HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
     ParticleLanes gathered[4];
     Vec3<RealLanes> p[4];
     RealLanes w[4];
-    for (int k = 0; k < 4; ++k) {
-      gathered[k] = gather_particles(particles, slot[k] + i);
-      p[k] = gathered[k].position;
-      w[k] = gathered[k].inverse_mass;
-    }
+    gather_constraint_particles(particles, slot, i, gathered, p, w);
     Mat3<RealLanes> rest_inverse;
     for (int j = 0; j < 3; ++j)
       rest_inverse.col[j] = {
@@ -58,8 +54,7 @@ HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
                     hn::LoadU(d, constraints.youngs_modulus.data() + i), poisson,
                     kHandleInversion, corr);
     }
-    for (int k = 0; k < 4; ++k)
-      scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
+    scatter_constraint_particles(particles, slot, i, gathered, corr, active);
   }
 }
 

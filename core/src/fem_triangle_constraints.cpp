@@ -23,17 +23,13 @@ void ProjectFEMTriangleConstraints(ParticleArrays particles,
   const RealTag d;
   const std::size_t lanes = hn::Lanes(d);
   const ParticleIndex* slot[3];
-  for (int k = 0; k < 3; ++k) slot[k] = constraints.particles.particle[std::size_t(k)].data();
+  constraint_slots(constraints.particles, slot);
   for (std::size_t i = begin; i < end; i += lanes) {
     const LaneMask active = hn::FirstN(d, end - i);
     ParticleLanes gathered[3];
     Vec3<RealLanes> p[3];
     RealLanes w[3];
-    for (int k = 0; k < 3; ++k) {
-      gathered[k] = gather_particles(particles, slot[k] + i);
-      p[k] = gathered[k].position;
-      w[k] = gathered[k].inverse_mass;
-    }
+    gather_constraint_particles(particles, slot, i, gathered, p, w);
     RealLanes m[2][2];
     for (int k = 0; k < 2; ++k)
       for (int j = 0; j < 2; ++j)
@@ -45,8 +41,7 @@ void ProjectFEMTriangleConstraints(ParticleArrays particles,
                      hn::LoadU(d, constraints.youngs_modulus_shear.data() + i),
                      hn::LoadU(d, constraints.poisson_ratio_xy.data() + i),
                      hn::LoadU(d, constraints.poisson_ratio_yx.data() + i), corr);
-    for (int k = 0; k < 3; ++k)
-      scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
+    scatter_constraint_particles(particles, slot, i, gathered, corr, active);
   }
 }
 

@@ -23,7 +23,7 @@ HWY_NOINLINE void project_strain_tetra_lanes(ParticleArrays particles,
   const RealTag d;
   const std::size_t lanes = hn::Lanes(d);
   const ParticleIndex* slot[4];
-  for (int k = 0; k < 4; ++k) slot[k] = constraints.particles.particle[std::size_t(k)].data();
+  constraint_slots(constraints.particles, slot);
   const Real* stiffness_array[6];
   for (int s = 0; s < 3; ++s) {
     stiffness_array[s] = constraints.stretch_stiffness[std::size_t(s)].data();
@@ -34,11 +34,7 @@ HWY_NOINLINE void project_strain_tetra_lanes(ParticleArrays particles,
     ParticleLanes gathered[4];
     Vec3<RealLanes> p[4];
     RealLanes w[4];
-    for (int k = 0; k < 4; ++k) {
-      gathered[k] = gather_particles(particles, slot[k] + i);
-      p[k] = gathered[k].position;
-      w[k] = gathered[k].inverse_mass;
-    }
+    gather_constraint_particles(particles, slot, i, gathered, p, w);
     RealLanes m[3][3];
     for (int k = 0; k < 3; ++k)
       for (int j = 0; j < 3; ++j)
@@ -48,8 +44,7 @@ HWY_NOINLINE void project_strain_tetra_lanes(ParticleArrays particles,
     Vec3<RealLanes> corr[4];
     project_strain<3>(p, w, m, kStrainTetraEntries, stiffness, kNormalizeStretch,
                       kNormalizeShear, corr);
-    for (int k = 0; k < 4; ++k)
-      scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
+    scatter_constraint_particles(particles, slot, i, gathered, corr, active);
   }
 }
 

@@ -23,7 +23,7 @@ HWY_NOINLINE void project_strain_triangle_lanes(ParticleArrays particles,
   const RealTag d;
   const std::size_t lanes = hn::Lanes(d);
   const ParticleIndex* slot[3];
-  for (int k = 0; k < 3; ++k) slot[k] = constraints.particles.particle[std::size_t(k)].data();
+  constraint_slots(constraints.particles, slot);
   const Real* stiffness_array[3] = {constraints.xx_stiffness.data(),
                                     constraints.yy_stiffness.data(),
                                     constraints.xy_stiffness.data()};
@@ -32,11 +32,7 @@ HWY_NOINLINE void project_strain_triangle_lanes(ParticleArrays particles,
     ParticleLanes gathered[3];
     Vec3<RealLanes> p[3];
     RealLanes w[3];
-    for (int k = 0; k < 3; ++k) {
-      gathered[k] = gather_particles(particles, slot[k] + i);
-      p[k] = gathered[k].position;
-      w[k] = gathered[k].inverse_mass;
-    }
+    gather_constraint_particles(particles, slot, i, gathered, p, w);
     RealLanes m[2][2];
     for (int k = 0; k < 2; ++k)
       for (int j = 0; j < 2; ++j)
@@ -46,8 +42,7 @@ HWY_NOINLINE void project_strain_triangle_lanes(ParticleArrays particles,
     Vec3<RealLanes> corr[3];
     project_strain<2>(p, w, m, kStrainTriangleEntries, stiffness, kNormalizeStretch,
                       kNormalizeShear, corr);
-    for (int k = 0; k < 3; ++k)
-      scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
+    scatter_constraint_particles(particles, slot, i, gathered, corr, active);
   }
 }
 

@@ -18,6 +18,7 @@
 
 #include <cstdint>
 
+#include <tessera/core/constraint_batch.hpp>
 #include <tessera/core/particle_state.hpp>
 #include <tessera/core/simd.hpp>
 
@@ -106,6 +107,39 @@ HWY_INLINE void scatter_corrected(ParticleArrays& particles, const ParticleIndex
     bits &= bits - 1;
   }
 #endif
+}
+
+/// The index arrays of the N slots of an N-particle family.
+template <int N>
+HWY_INLINE void constraint_slots(const ConstraintParticles<N>& indices,
+                                 const ParticleIndex* (&slot)[N]) {
+  for (int k = 0; k < N; ++k) slot[k] = indices.particle[std::size_t(k)].data();
+}
+
+/// Gathers the N particles of constraints i .. i+W, slot by slot: gathered keeps what the
+/// scatter needs, position and w are the formula's inputs.
+template <int N>
+HWY_INLINE void gather_constraint_particles(const ParticleArrays& particles,
+                                            const ParticleIndex* const* slot, std::size_t i,
+                                            ParticleLanes (&gathered)[N],
+                                            Vec3<RealLanes> (&position)[N],
+                                            RealLanes (&w)[N]) {
+  for (int k = 0; k < N; ++k) {
+    gathered[k] = gather_particles(particles, slot[k] + i);
+    position[k] = gathered[k].position;
+    w[k] = gathered[k].inverse_mass;
+  }
+}
+
+/// Scatters the corrected movable particles of the active lanes of constraints i .. i+W.
+template <int N>
+HWY_INLINE void scatter_constraint_particles(ParticleArrays& particles,
+                                             const ParticleIndex* const* slot, std::size_t i,
+                                             const ParticleLanes (&gathered)[N],
+                                             const Vec3<RealLanes> (&corr)[N],
+                                             const LaneMask& active) {
+  for (int k = 0; k < N; ++k)
+    scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
 }
 
 /// Stores the active lanes of value to out[0 .. W): one vector store when every lane is

@@ -51,7 +51,7 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   const RealTag d;
   const std::size_t lanes = hn::Lanes(d);
   const ParticleIndex* slot[N];
-  for (int k = 0; k < N; ++k) slot[k] = indices.particle[std::size_t(k)].data();
+  constraint_slots(indices, slot);
   const bool compliance = settings.semantics == ConstraintSemantics::compliance;
   const RealLanes dt = hn::Set(d, settings.dt);
   for (std::size_t i = begin; i < end; i += lanes) {
@@ -60,11 +60,7 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
     ParticleLanes gathered[N];
     Vec3<RealLanes> position[N];
     RealLanes w[N];
-    for (int k = 0; k < N; ++k) {
-      gathered[k] = gather_particles(particles, slot[k] + i);
-      position[k] = gathered[k].position;
-      w[k] = gathered[k].inverse_mass;
-    }
+    gather_constraint_particles(particles, slot, i, gathered, position, w);
     const ConstraintValue<RealLanes, N> value = evaluate(position, i);
     Vec3<RealLanes> corr[N];
     if (compliance) {
@@ -74,8 +70,7 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
     } else {
       project_pbd(value, w, stiffness_of(value, i), corr);
     }
-    for (int k = 0; k < N; ++k)
-      scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
+    scatter_constraint_particles(particles, slot, i, gathered, corr, active);
   }
 }
 

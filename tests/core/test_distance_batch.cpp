@@ -32,21 +32,19 @@ void project_scalar(const test::DisjointConstraintSet<2>& set,
                     const DistanceConstraints& constraints, std::size_t begin, std::size_t end,
                     const ProjectionSettings& settings, std::vector<Vector3r>& expected,
                     std::vector<Real>& expected_lambda) {
-  for (std::size_t c = begin; c < end; ++c) {
-    const ParticleIndex i = set.indices[2 * c], j = set.indices[2 * c + 1];
-    Vector3r corr0, corr1;
-    if (settings.semantics == ConstraintSemantics::stiffness)
-      PositionBasedDynamics::solve_DistanceConstraint(
-          expected[i], set.inverse_masses[i], expected[j], set.inverse_masses[j],
-          constraints.rest_length[c], constraints.stiffness[c], corr0, corr1);
-    else
-      XPBD::solve_DistanceConstraint(expected[i], set.inverse_masses[i], expected[j],
-                                     set.inverse_masses[j], constraints.rest_length[c],
-                                     constraints.compliance[c], settings.dt,
-                                     expected_lambda[c], corr0, corr1);
-    if (set.inverse_masses[i] > 0) expected[i] += corr0;
-    if (set.inverse_masses[j] > 0) expected[j] += corr1;
-  }
+  const std::vector<Real>& w = set.inverse_masses;
+  test::project_scalar_range<2>(
+      set, begin, end, expected,
+      [&](const ParticleIndex* i, std::size_t c, Vector3r(&corr)[2]) {
+        if (settings.semantics == ConstraintSemantics::stiffness)
+          PositionBasedDynamics::solve_DistanceConstraint(
+              expected[i[0]], w[i[0]], expected[i[1]], w[i[1]], constraints.rest_length[c],
+              constraints.stiffness[c], corr[0], corr[1]);
+        else
+          XPBD::solve_DistanceConstraint(expected[i[0]], w[i[0]], expected[i[1]], w[i[1]],
+                                         constraints.rest_length[c], constraints.compliance[c],
+                                         settings.dt, expected_lambda[c], corr[0], corr[1]);
+      });
 }
 
 TEST(DistanceBatch, MatchesScalarApiOnEveryTarget) {

@@ -77,22 +77,20 @@ void project_scalar(const test::DisjointConstraintSet<4>& set,
                     const ProjectionSettings& settings, std::vector<Vector3r>& expected,
                     std::vector<Real>& lambda) {
   const std::vector<Real>& w = set.inverse_masses;
-  for (std::size_t c = begin; c < end; ++c) {
-    const ParticleIndex* i = &set.indices[4 * c];
-    Vector3r corr[4];
-    if (settings.semantics == ConstraintSemantics::stiffness)
-      PositionBasedDynamics::solve_VolumeConstraint(
-          expected[i[0]], w[i[0]], expected[i[1]], w[i[1]], expected[i[2]], w[i[2]],
-          expected[i[3]], w[i[3]], constraints.rest_volume[c], constraints.stiffness[c],
-          corr[0], corr[1], corr[2], corr[3]);
-    else
-      XPBD::solve_VolumeConstraint(expected[i[0]], w[i[0]], expected[i[1]], w[i[1]],
-                                   expected[i[2]], w[i[2]], expected[i[3]], w[i[3]],
-                                   constraints.rest_volume[c], constraints.compliance[c],
-                                   settings.dt, lambda[c], corr[0], corr[1], corr[2], corr[3]);
-    for (int k = 0; k < 4; ++k)
-      if (w[i[k]] > 0) expected[i[k]] += corr[k];
-  }
+  test::project_scalar_range<4>(
+      set, begin, end, expected,
+      [&](const ParticleIndex* i, std::size_t c, Vector3r(&corr)[4]) {
+        if (settings.semantics == ConstraintSemantics::stiffness)
+          PositionBasedDynamics::solve_VolumeConstraint(
+              expected[i[0]], w[i[0]], expected[i[1]], w[i[1]], expected[i[2]], w[i[2]],
+              expected[i[3]], w[i[3]], constraints.rest_volume[c], constraints.stiffness[c],
+              corr[0], corr[1], corr[2], corr[3]);
+        else
+          XPBD::solve_VolumeConstraint(expected[i[0]], w[i[0]], expected[i[1]], w[i[1]],
+                                       expected[i[2]], w[i[2]], expected[i[3]], w[i[3]],
+                                       constraints.rest_volume[c], constraints.compliance[c],
+                                       settings.dt, lambda[c], corr[0], corr[1], corr[2], corr[3]);
+      });
 }
 
 TEST(VolumeBatch, MatchesScalarApiOnEveryTarget) {

@@ -130,6 +130,22 @@ inline bool same_bits(const ParticleState& a, const ParticleState& b) {
   return a.x == b.x && a.y == b.y && a.z == b.z;
 }
 
+/// The scalar reference of a batch test: for constraints [begin, end) one by one,
+/// solve(i, c, corr) runs the scalar API on constraint c (particles i[0 .. N)) at the current
+/// `expected` positions, and each correction is added to its particle when it is movable.
+template <int N, class Solve>
+void project_scalar_range(const DisjointConstraintSet<N>& set, std::size_t begin,
+                          std::size_t end, std::vector<Vector3r>& expected, Solve&& solve) {
+  const std::vector<Real>& w = set.inverse_masses;
+  for (std::size_t c = begin; c < end; ++c) {
+    const ParticleIndex* i = &set.indices[std::size_t(N) * c];
+    Vector3r corr[N];
+    solve(i, c, corr);
+    for (int k = 0; k < N; ++k)
+      if (w[i[k]] > 0) expected[i[k]] += corr[k];
+  }
+}
+
 // ------------------------------------------------------------ the tests every family repeats
 //
 // The families' batch tests share their structure; these run it for a family given

@@ -17,10 +17,7 @@ using Points = std::array<Vector3r, 4>;
 using Masses = std::array<Real, 4>;
 constexpr Real kPi = std::numbers::pi_v<Real>;
 
-struct Projection {
-  bool ok = false;
-  Points corr;
-};
+using Projection = ScalarProjection<4>;
 
 Projection project(const Points& x, const Masses& w, Real rest_angle, Real stiffness) {
   Projection r;
@@ -45,12 +42,6 @@ Real dihedral_angle(const Points& x) {
   const Vector3r n1 = (x[2] - x[0]).cross(x[3] - x[0]).normalized();
   const Vector3r n2 = (x[3] - x[1]).cross(x[2] - x[1]).normalized();
   return std::acos(std::clamp(n1.dot(n2), Real(-1), Real(1)));
-}
-
-Points applied(const Points& x, const Points& corr) {
-  Points y;
-  for (int i = 0; i < 4; ++i) y[i] = x[i] + corr[i];
-  return y;
 }
 
 /// Shared edge p2 = 0, p3 = e_x; wing p0 = (0.5, 1, 0); wing p1 rotated about the edge so the

@@ -12,10 +12,7 @@ namespace {
 using Points = std::array<Vector3r, 2>;
 using Masses = std::array<Real, 2>;
 
-struct Projection {
-  bool ok = false;
-  Points corr;
-};
+using Projection = ScalarProjection<2>;
 
 Projection project(const Points& x, const Masses& w, Real rest_length, Real stiffness) {
   Projection r;
@@ -35,8 +32,6 @@ Projection project_xpbd(const Points& x, const Masses& w, Real rest_length, Real
 Real distance_constraint(const Points& x, Real rest_length) {
   return (x[0] - x[1]).norm() - rest_length;
 }
-
-Points applied(const Points& x, const Points& corr) { return {x[0] + corr[0], x[1] + corr[1]}; }
 
 TEST(DistanceConstraint, HandCheckedStretchedPair) {
   // Length 3 along x, rest 1, w = (1, 3): C = 2, s = 2 / 4, Δp0 = -0.5·1·(1,0,0),

@@ -16,10 +16,7 @@ namespace {
 using Points = std::array<Vector3r, 4>;
 using Masses = std::array<Real, 4>;
 
-struct Projection {
-  bool ok = false;
-  Points corr;
-};
+using Projection = ScalarProjection<4>;
 
 Matrix4r bending_matrix(const Points& rest) {
   Matrix4r Q;
@@ -52,12 +49,6 @@ Real bending_energy(const Matrix4r& Q, const Points& x) {
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) C += Q(i, j) * (x[i] - x[2]).dot(x[j] - x[2]);
   return C / 2;
-}
-
-Points applied(const Points& x, const Points& corr) {
-  Points y;
-  for (int i = 0; i < 4; ++i) y[i] = x[i] + corr[i];
-  return y;
 }
 
 /// Shared edge p2 = 0, p3 = e_x, wings at height ±1 above the middle of the edge.

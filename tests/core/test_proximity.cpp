@@ -16,10 +16,7 @@ template <std::size_t N>
 using Masses = std::array<Real, N>;
 
 template <std::size_t N>
-struct Projection {
-  bool ok = false;
-  Points<N> corr;
-};
+using Projection = ScalarProjection<N>;
 
 // The kernels under test, with the points in parameter order.
 Projection<3> edge_point(const Points<3>& x, const Masses<3>& w, Real rest, Real compression,
@@ -95,13 +92,6 @@ Real triangle_point_distance(const Points<4>& x) {
 }
 Real edge_edge_distance(const Points<4>& x) {
   return segment_segment_distance(x[0], x[1], x[2], x[3]);
-}
-
-template <std::size_t N>
-Points<N> applied(const Points<N>& x, const Points<N>& corr) {
-  Points<N> y;
-  for (std::size_t i = 0; i < N; ++i) y[i] = x[i] + corr[i];
-  return y;
 }
 
 template <std::size_t N>

@@ -13,10 +13,7 @@ namespace {
 using Points = std::array<Vector3r, 4>;
 using Masses = std::array<Real, 4>;
 
-struct Projection {
-  bool ok = false;
-  Points corr;
-};
+using Projection = ScalarProjection<4>;
 
 Projection project(const Points& x, const Masses& w, Real rest_volume, Real stiffness) {
   Projection r;
@@ -40,12 +37,6 @@ Real signed_volume(const Points& x) {
   Matrix3r edges;
   edges << x[1] - x[0], x[2] - x[0], x[3] - x[0];
   return edges.determinant() / 6;
-}
-
-Points applied(const Points& x, const Points& corr) {
-  Points y;
-  for (int i = 0; i < 4; ++i) y[i] = x[i] + corr[i];
-  return y;
 }
 
 /// A random tetrahedron of reasonable shape (volume magnitude above 0.02).

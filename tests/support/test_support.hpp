@@ -241,4 +241,20 @@ void expect_pbd_step(F&& f, const std::array<Vector3r, N>& x, const std::array<R
   EXPECT_NEAR(fitted, expected, kFiniteDifferenceTolerance * std::abs(expected) + kRoundOff);
 }
 
+/// What a scalar solve reports: whether it projected, and the N corrections.
+template <std::size_t N>
+struct ScalarProjection {
+  bool ok = false;
+  std::array<Vector3r, N> corr;
+};
+
+/// The points moved by their corrections, x_i + corr_i.
+template <std::size_t N>
+std::array<Vector3r, N> applied(const std::array<Vector3r, N>& x,
+                                const std::array<Vector3r, N>& corr) {
+  std::array<Vector3r, N> y;
+  for (std::size_t i = 0; i < N; ++i) y[i] = x[i] + corr[i];
+  return y;
+}
+
 }  // namespace tessera::test

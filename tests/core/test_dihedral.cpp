@@ -246,19 +246,8 @@ TEST(XPBDDihedralConstraint, InvalidTimeStepOrComplianceReturnsFalseAndKeepsLamb
 }
 
 TEST(DihedralConstraint, NearDegenerateInputStaysFinite) {
-  Random random(306);
-  for (int trial = 0; trial < 300; ++trial) {
-    const Real scale = kNearDegenerateScales[trial % kNearDegenerateScales.size()];
-    const Points x = near_degenerate_points<4>(random, trial % 3, scale);
-    const Masses w = masses_with_static<4>(random);
-    const Real rest = random.uniform(0, kPi);
-    const Projection r = project(x, w, rest, 1);
-    EXPECT_TRUE(finite_or_rejected(r.ok, r.corr)) << "scale " << scale;
-    Real lambda = 0;
-    const Projection soft = project_xpbd(x, w, rest, Real(1e-6), Real(0.01), lambda);
-    EXPECT_TRUE(finite_or_rejected(soft.ok, soft.corr)) << "scale " << scale;
-    EXPECT_TRUE(std::isfinite(lambda));
-  }
+  expect_near_degenerate_input_stays_finite<4>(
+      306, 3, [](Random& random) { return random.uniform(0, kPi); }, project, project_xpbd);
 }
 
 }  // namespace

@@ -207,19 +207,8 @@ TEST(XPBDVolumeConstraint, InvalidTimeStepOrComplianceReturnsFalseAndKeepsLambda
 }
 
 TEST(VolumeConstraint, NearDegenerateInputStaysFinite) {
-  Random random(206);
-  for (int trial = 0; trial < 300; ++trial) {
-    const Real scale = kNearDegenerateScales[trial % kNearDegenerateScales.size()];
-    const Points x = near_degenerate_points<4>(random, trial % 3, scale);
-    const Masses w = masses_with_static<4>(random);
-    const Real rest = random.uniform(-0.2, 0.2);
-    const Projection r = project(x, w, rest, 1);
-    EXPECT_TRUE(finite_or_rejected(r.ok, r.corr)) << "scale " << scale;
-    Real lambda = 0;
-    const Projection soft = project_xpbd(x, w, rest, Real(1e-6), Real(0.01), lambda);
-    EXPECT_TRUE(finite_or_rejected(soft.ok, soft.corr)) << "scale " << scale;
-    EXPECT_TRUE(std::isfinite(lambda));
-  }
+  expect_near_degenerate_input_stays_finite<4>(
+      206, 3, [](Random& random) { return random.uniform(-0.2, 0.2); }, project, project_xpbd);
 }
 
 }  // namespace

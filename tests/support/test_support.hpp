@@ -257,4 +257,28 @@ std::array<Vector3r, N> applied(const std::array<Vector3r, N>& x,
   return y;
 }
 
+/// Near-degenerate input never gives NaN (seed, 300 trials): N points near one point (pattern
+/// trial % patterns: 0 a point, 1 a line, 2 a plane) at each of kNearDegenerateScales, masses
+/// with static particles and rest = random_rest(random); project(x, w, rest, 1) and
+/// project_xpbd(x, w, rest, 1e-6, 0.01, λ = 0) give finite corrections, all zero when they
+/// report false, and a finite λ.
+template <std::size_t N, class RandomRest, class Project, class ProjectXpbd>
+void expect_near_degenerate_input_stays_finite(unsigned seed, int patterns,
+                                               RandomRest&& random_rest, Project&& project,
+                                               ProjectXpbd&& project_xpbd) {
+  Random random(seed);
+  for (int trial = 0; trial < 300; ++trial) {
+    const Real scale = kNearDegenerateScales[std::size_t(trial) % kNearDegenerateScales.size()];
+    const std::array<Vector3r, N> x = near_degenerate_points<N>(random, trial % patterns, scale);
+    const std::array<Real, N> w = masses_with_static<N>(random);
+    const Real rest = random_rest(random);
+    const auto r = project(x, w, rest, 1);
+    EXPECT_TRUE(finite_or_rejected(r.ok, r.corr)) << "scale " << scale;
+    Real lambda = 0;
+    const auto soft = project_xpbd(x, w, rest, Real(1e-6), Real(0.01), lambda);
+    EXPECT_TRUE(finite_or_rejected(soft.ok, soft.corr)) << "scale " << scale;
+    EXPECT_TRUE(std::isfinite(lambda));
+  }
+}
+
 }  // namespace tessera::test

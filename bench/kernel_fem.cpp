@@ -50,23 +50,12 @@ void triangle_scalar(benchmark::State& state) {
     PositionBasedDynamics::init_FEMTriangleConstraint(
         scene.rest[scene.indices[3 * c]], scene.rest[scene.indices[3 * c + 1]],
         scene.rest[scene.indices[3 * c + 2]], area[c], rest_inverse[c]);
-  std::vector<Vector3r> x = scene.current;
-  const std::vector<Real>& w = scene.inverse_mass;
-  for (auto _ : state) {
-    for (std::size_t c = 0; c < scene.count; ++c) {
-      const ParticleIndex i = scene.indices[3 * c], j = scene.indices[3 * c + 1],
-                          k = scene.indices[3 * c + 2];
-      Vector3r corr0, corr1, corr2;
-      if (PositionBasedDynamics::solve_FEMTriangleConstraint(
-              x[i], w[i], x[j], w[j], x[k], w[k], area[c], rest_inverse[c], kYoung, kYoung,
-              kYoung / (2 * (1 + kPoisson)), kPoisson, kPoisson, corr0, corr1, corr2)) {
-        x[i] += corr0;
-        x[j] += corr1;
-        x[k] += corr2;
-      }
-    }
-    benchmark::ClobberMemory();
-  }
+  run_scalar_sweeps<3>(state, scene, [&](auto& x, const auto& w, const ParticleIndex* p,
+                                         std::size_t c, Vector3r(&corr)[3]) {
+    return PositionBasedDynamics::solve_FEMTriangleConstraint(
+        x[p[0]], w[p[0]], x[p[1]], w[p[1]], x[p[2]], w[p[2]], area[c], rest_inverse[c], kYoung,
+        kYoung, kYoung / (2 * (1 + kPoisson)), kPoisson, kPoisson, corr[0], corr[1], corr[2]);
+  });
 }
 
 void triangle_batch(benchmark::State& state, bool sorted) {
@@ -77,13 +66,8 @@ void triangle_batch(benchmark::State& state, bool sorted) {
   input.youngs_modulus_x = input.youngs_modulus_y = kYoung;
   input.youngs_modulus_shear = kYoung / (2 * (1 + kPoisson));
   input.poisson_ratio_xy = input.poisson_ratio_yx = kPoisson;
-  FEMTriangleConstraints constraints = make_fem_triangle_constraints(input);
-  ParticleState particles(scene.current, scene.inverse_mass);
-  for (auto _ : state) {
-    project_fem_triangle_constraints(ParticleArrays::of(particles), constraints, 0, scene.count,
-                                     {});
-    benchmark::ClobberMemory();
-  }
+  run_batch_sweeps(state, scene, make_fem_triangle_constraints(input),
+                   project_fem_triangle_constraints);
 }
 
 void tetra_scalar(benchmark::State& state, bool xpbd, bool inverted = false) {

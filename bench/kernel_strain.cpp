@@ -39,23 +39,12 @@ void triangle_scalar(benchmark::State& state) {
     PositionBasedDynamics::init_StrainTriangleConstraint(
         scene.rest[scene.indices[3 * c]], scene.rest[scene.indices[3 * c + 1]],
         scene.rest[scene.indices[3 * c + 2]], rest_inverse[c]);
-  std::vector<Vector3r> x = scene.current;
-  const std::vector<Real>& w = scene.inverse_mass;
-  for (auto _ : state) {
-    for (std::size_t c = 0; c < scene.count; ++c) {
-      const ParticleIndex i = scene.indices[3 * c], j = scene.indices[3 * c + 1],
-                          k = scene.indices[3 * c + 2];
-      Vector3r corr0, corr1, corr2;
-      if (PositionBasedDynamics::solve_StrainTriangleConstraint(
-              x[i], w[i], x[j], w[j], x[k], w[k], rest_inverse[c], 1, 1, 1, kNormalizeStretch,
-              kNormalizeShear, corr0, corr1, corr2)) {
-        x[i] += corr0;
-        x[j] += corr1;
-        x[k] += corr2;
-      }
-    }
-    benchmark::ClobberMemory();
-  }
+  run_scalar_sweeps<3>(state, scene, [&](auto& x, const auto& w, const ParticleIndex* p,
+                                         std::size_t c, Vector3r(&corr)[3]) {
+    return PositionBasedDynamics::solve_StrainTriangleConstraint(
+        x[p[0]], w[p[0]], x[p[1]], w[p[1]], x[p[2]], w[p[2]], rest_inverse[c], 1, 1, 1,
+        kNormalizeStretch, kNormalizeShear, corr[0], corr[1], corr[2]);
+  });
 }
 
 void triangle_batch(benchmark::State& state, bool sorted) {
@@ -65,13 +54,8 @@ void triangle_batch(benchmark::State& state, bool sorted) {
   input.rest_positions = scene.rest;
   input.normalize_stretch = kNormalizeStretch;
   input.normalize_shear = kNormalizeShear;
-  StrainTriangleConstraints constraints = make_strain_triangle_constraints(input);
-  ParticleState particles(scene.current, scene.inverse_mass);
-  for (auto _ : state) {
-    project_strain_triangle_constraints(ParticleArrays::of(particles), constraints, 0,
-                                        scene.count, {});
-    benchmark::ClobberMemory();
-  }
+  run_batch_sweeps(state, scene, make_strain_triangle_constraints(input),
+                   project_strain_triangle_constraints);
 }
 
 void tetra_scalar(benchmark::State& state) {
@@ -82,21 +66,13 @@ void tetra_scalar(benchmark::State& state) {
         scene.rest[scene.indices[4 * c]], scene.rest[scene.indices[4 * c + 1]],
         scene.rest[scene.indices[4 * c + 2]], scene.rest[scene.indices[4 * c + 3]],
         rest_inverse[c]);
-  std::vector<Vector3r> x = scene.current;
-  const std::vector<Real>& w = scene.inverse_mass;
   const Vector3r ones = Vector3r::Ones();
-  for (auto _ : state) {
-    for (std::size_t c = 0; c < scene.count; ++c) {
-      const ParticleIndex* p = &scene.indices[4 * c];
-      Vector3r corr[4];
-      if (PositionBasedDynamics::solve_StrainTetraConstraint(
-              x[p[0]], w[p[0]], x[p[1]], w[p[1]], x[p[2]], w[p[2]], x[p[3]], w[p[3]],
-              rest_inverse[c], ones, ones, kNormalizeStretch, kNormalizeShear, corr[0], corr[1],
-              corr[2], corr[3]))
-        for (int k = 0; k < 4; ++k) x[p[k]] += corr[k];
-    }
-    benchmark::ClobberMemory();
-  }
+  run_scalar_sweeps<4>(state, scene, [&](auto& x, const auto& w, const ParticleIndex* p,
+                                         std::size_t c, Vector3r(&corr)[4]) {
+    return PositionBasedDynamics::solve_StrainTetraConstraint(
+        x[p[0]], w[p[0]], x[p[1]], w[p[1]], x[p[2]], w[p[2]], x[p[3]], w[p[3]], rest_inverse[c],
+        ones, ones, kNormalizeStretch, kNormalizeShear, corr[0], corr[1], corr[2], corr[3]);
+  });
 }
 
 void tetra_batch(benchmark::State& state, bool sorted) {
@@ -106,13 +82,8 @@ void tetra_batch(benchmark::State& state, bool sorted) {
   input.rest_positions = scene.rest;
   input.normalize_stretch = kNormalizeStretch;
   input.normalize_shear = kNormalizeShear;
-  StrainTetraConstraints constraints = make_strain_tetra_constraints(input);
-  ParticleState particles(scene.current, scene.inverse_mass);
-  for (auto _ : state) {
-    project_strain_tetra_constraints(ParticleArrays::of(particles), constraints, 0, scene.count,
-                                     {});
-    benchmark::ClobberMemory();
-  }
+  run_batch_sweeps(state, scene, make_strain_tetra_constraints(input),
+                   project_strain_tetra_constraints);
 }
 
 const bool registered = [] {

@@ -7,10 +7,8 @@
 #include <string>
 #include <utility>
 
-#include <tessera/core/edge_edge_distance_constraints.hpp>
-#include <tessera/core/edge_point_distance_constraints.hpp>
+#include <tessera/core/proximity_distance_constraints.hpp>
 #include <tessera/core/position_based_dynamics.hpp>
-#include <tessera/core/triangle_point_distance_constraints.hpp>
 
 #include "kernel_benchmark_support.hpp"
 

@@ -10,9 +10,7 @@
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 
-#include <tessera/core/edge_edge_distance_constraints.hpp>
-#include <tessera/core/edge_point_distance_constraints.hpp>
-#include <tessera/core/triangle_point_distance_constraints.hpp>
+#include <tessera/core/proximity_distance_constraints.hpp>
 
 #include "kernels/batch_loop-inl.h"
 #include "kernels/proximity-inl.h"
@@ -80,15 +78,15 @@ HWY_AFTER_NAMESPACE();
 namespace tessera {
 namespace {
 
-/// The builder of every proximity family: N indices, a rest distance (shared or one per
+/// The builder of every proximity family: its indices, a rest distance (shared or one per
 /// constraint, each ≥ 0) and the compression and stretch stiffness.
-template <int N, class Constraints, class Input>
-Constraints make_proximity_constraints(const Input& input) {
+template <class Constraints>
+Constraints make_proximity_constraints(const ProximityDistanceConstraintInput& input) {
   const detail::ConstraintValidator validator(Constraints::kFamily, input.particle_count);
   validator.check_parameter("compression stiffness", input.compression_stiffness);
   validator.check_parameter("stretch stiffness", input.stretch_stiffness);
   Constraints result;
-  result.particles = validator.particles<N>(input.particles);
+  result.particles = validator.particles<Constraints::kParticles>(input.particles);
   const std::size_t n = result.size();
   const bool per_constraint = !input.rest_distances.empty();
   if (per_constraint && input.rest_distances.size() != n)
@@ -127,18 +125,18 @@ HWY_EXPORT(ProjectTrianglePointDistanceConstraints);
 HWY_EXPORT(ProjectEdgeEdgeDistanceConstraints);
 
 EdgePointDistanceConstraints make_edge_point_distance_constraints(
-    const EdgePointDistanceConstraintInput& input) {
-  return make_proximity_constraints<3, EdgePointDistanceConstraints>(input);
+    const ProximityDistanceConstraintInput& input) {
+  return make_proximity_constraints<EdgePointDistanceConstraints>(input);
 }
 
 TrianglePointDistanceConstraints make_triangle_point_distance_constraints(
-    const TrianglePointDistanceConstraintInput& input) {
-  return make_proximity_constraints<4, TrianglePointDistanceConstraints>(input);
+    const ProximityDistanceConstraintInput& input) {
+  return make_proximity_constraints<TrianglePointDistanceConstraints>(input);
 }
 
 EdgeEdgeDistanceConstraints make_edge_edge_distance_constraints(
-    const EdgeEdgeDistanceConstraintInput& input) {
-  return make_proximity_constraints<4, EdgeEdgeDistanceConstraints>(input);
+    const ProximityDistanceConstraintInput& input) {
+  return make_proximity_constraints<EdgeEdgeDistanceConstraints>(input);
 }
 
 void project_edge_point_distance_constraints(ParticleArrays particles,

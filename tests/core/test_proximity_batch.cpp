@@ -5,11 +5,9 @@
 // distance and compression/stretch stiffness, so a vector holds lanes that take different
 // regions, different stiffnesses and no correction at all side by side. Plus the validation
 // of the batch input.
-#include <tessera/core/edge_edge_distance_constraints.hpp>
-#include <tessera/core/edge_point_distance_constraints.hpp>
+#include <tessera/core/proximity_distance_constraints.hpp>
 #include <tessera/core/error.hpp>
 #include <tessera/core/position_based_dynamics.hpp>
-#include <tessera/core/triangle_point_distance_constraints.hpp>
 
 #include "batch_test_support.hpp"
 

@@ -13,7 +13,11 @@ install(TARGETS ${_targets} tessera EXPORT TesseraTargets
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 foreach(_dir ${_include_dirs})
-  install(DIRECTORY ${_dir}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  # A module without public headers yet has no include folder in a clone (git keeps no
+  # empty folders).
+  if(IS_DIRECTORY ${_dir})
+    install(DIRECTORY ${_dir}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  endif()
 endforeach()
 install(DIRECTORY ${TESSERA_GENERATED_INCLUDE_DIR}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 if(TARGET tessera_cli)

@@ -16,7 +16,6 @@
 #include <string>
 
 #include <metis.h>
-#include <unistd.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -35,17 +34,6 @@ void contiguous_blocks(ParticlePartition& partition, const std::vector<ParticleI
 }
 
 }  // namespace
-
-std::size_t cache_sized_particles_per_part(const ConstraintGraph& graph, std::size_t cache_bytes) {
-  if (cache_bytes == 0) {
-    const long l2 = sysconf(_SC_LEVEL2_CACHE_SIZE);
-    cache_bytes = l2 > 0 ? static_cast<std::size_t>(l2) : std::size_t(1) << 20;
-  }
-  const std::size_t movable = std::max<std::size_t>(graph.movable_particle_count(), 1);
-  const std::size_t incidences_per_particle = (graph.incidence_count() + movable - 1) / movable;
-  const std::size_t bytes_per_particle = 8 * sizeof(Real) + 8 * incidences_per_particle;
-  return std::max<std::size_t>(cache_bytes / bytes_per_particle, 64);
-}
 
 ParticlePartition partition_particles(const ConstraintGraph& graph, std::size_t part_count,
                                       std::uint64_t seed) {

@@ -11,6 +11,7 @@
 
 #include <tessera/coloring/colouring_statistics.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
+#include <tessera/coloring/particle_partition.hpp>
 #include <tessera/coloring/refinement.hpp>
 #include <tessera/core/error.hpp>
 
@@ -238,6 +239,20 @@ TEST(MetisStrategy, RenumbersParticlesPartByPartAndListsColoursByPart) {
   }
   ASSERT_GT(windows, 0u);
   EXPECT_LT(spread / windows, 2.0 * options.particles_per_part);
+}
+
+TEST(MetisStrategy, DefaultPartSizeIsTheMeasuredConstant) {
+  // 90,000 movable particles: more than one part of the default size.
+  const ConstraintGraph graph = test::cloth_graph(300, 300, false);
+  ASSERT_GT(graph.movable_particle_count(), kDefaultParticlesPerPart);
+  ColouringOptions by_default, explicit_size;
+  explicit_size.particles_per_part = kDefaultParticlesPerPart;
+  const Colouring a = registry().get("metis").colour(graph, by_default);
+  const Colouring b = registry().get("metis").colour(graph, explicit_size);
+  EXPECT_TRUE(validate(graph, a).valid);
+  EXPECT_TRUE(std::equal(a.colours().begin(), a.colours().end(), b.colours().begin()));
+  EXPECT_TRUE(std::equal(a.particle_new_to_old().begin(), a.particle_new_to_old().end(),
+                         b.particle_new_to_old().begin()));
 }
 
 TEST(Balance, EvensOutColourSizesWithoutAddingColours) {

@@ -88,41 +88,14 @@ TEST(DihedralConstraint, HandCheckedRightAngleHinge) {
 }
 
 TEST(DihedralConstraint, InvariantsOnRandomInput) {
-  Random random(301);
-  for (int trial = 0; trial < 20; ++trial) {
-    const Points x = random_stencil(random);
-    const Masses w = random_masses(random);
-    const Real rest = random.uniform(0, kPi);
-    const Real stiffness = random.uniform(Real(0.2), Real(1));
-    const Projection r = project(x, w, rest, stiffness);
-    ASSERT_TRUE(r.ok);
-    ASSERT_TRUE(all_finite(r.corr));
-    EXPECT_TRUE(conserves_linear_momentum(r.corr, w));
-    EXPECT_TRUE(conserves_angular_momentum(x, r.corr, w));
-
-    expect_pbd_step(dihedral_angle, x, w, r.corr, dihedral_angle(x) - rest, stiffness);
-
-    const Matrix3r R = random.rotation();
-    const Vector3r t = random.vector(-5, 5);
-    const Points y = transformed(x, R, t);
-    EXPECT_NEAR(dihedral_angle(y), dihedral_angle(x), 50 * kRoundOff);
-    const Projection moved = project(y, w, rest, stiffness);
-    ASSERT_TRUE(moved.ok);
-    for (int i = 0; i < 4; ++i)
-      EXPECT_TRUE(near_relative(moved.corr[i], R * r.corr[i], 100 * kRoundOff));
-  }
+  expect_pbd_invariants_on_random_input<4>(
+      301, 20, random_stencil, random_masses,
+      [](Random& random) { return random.uniform(0, kPi); }, dihedral_angle, project,
+      100 * kRoundOff);
 }
 
 TEST(DihedralConstraint, StaticParticleIsNeverMoved) {
-  Random random(302);
-  for (int trial = 0; trial < 8; ++trial) {
-    const Points x = random_stencil(random);
-    Masses w = random_masses(random);
-    w[trial % 4] = 0;
-    const Projection r = project(x, w, Real(1), 1);
-    ASSERT_TRUE(r.ok);
-    EXPECT_EQ(r.corr[trial % 4], Vector3r::Zero());
-  }
+  expect_static_particle_never_moved<4>(302, 8, random_stencil, random_masses, Real(1), project);
 }
 
 TEST(DihedralConstraint, RepeatedProjectionConvergesMonotonically) {
@@ -195,16 +168,8 @@ TEST(DihedralConstraint, DegenerateInputGivesFalseAndZeroCorrection) {
 }
 
 TEST(XPBDDihedralConstraint, ZeroComplianceEqualsPBDWithStiffnessOne) {
-  Random random(304);
-  for (int trial = 0; trial < 10; ++trial) {
-    const Points x = random_stencil(random);
-    const Masses w = random_masses(random);
-    Real lambda = 0;
-    const Projection xpbd = project_xpbd(x, w, Real(1), 0, Real(0.01), lambda);
-    const Projection pbd = project(x, w, Real(1), 1);
-    ASSERT_TRUE(xpbd.ok);
-    for (int i = 0; i < 4; ++i) EXPECT_TRUE(near_relative(xpbd.corr[i], pbd.corr[i]));
-  }
+  expect_zero_compliance_equals_pbd<4>(304, 10, random_stencil, random_masses, Real(1), project,
+                                       project_xpbd);
 }
 
 TEST(XPBDDihedralConstraint, MultiplierConvergesToComplianceBalance) {

@@ -80,41 +80,15 @@ TEST(VolumeConstraint, SignFollowsOrientation) {
 }
 
 TEST(VolumeConstraint, InvariantsOnRandomInput) {
-  Random random(201);
-  for (int trial = 0; trial < 20; ++trial) {
-    const Points x = random_tetrahedron(random);
-    const Masses w = random_masses(random);
-    const Real rest = random.uniform(Real(-0.2), Real(0.2));
-    const Real stiffness = random.uniform(Real(0.2), Real(1));
-    const Projection r = project(x, w, rest, stiffness);
-    ASSERT_TRUE(r.ok);
-    ASSERT_TRUE(all_finite(r.corr));
-    EXPECT_TRUE(conserves_linear_momentum(r.corr, w));
-    EXPECT_TRUE(conserves_angular_momentum(x, r.corr, w));
-
-    expect_pbd_step(signed_volume, x, w, r.corr, signed_volume(x) - rest, stiffness);
-
-    const Matrix3r R = random.rotation();
-    const Vector3r t = random.vector(-5, 5);
-    const Points y = transformed(x, R, t);
-    EXPECT_NEAR(signed_volume(y), signed_volume(x), 50 * kRoundOff);
-    const Projection moved = project(y, w, rest, stiffness);
-    ASSERT_TRUE(moved.ok);
-    for (int i = 0; i < 4; ++i)
-      EXPECT_TRUE(near_relative(moved.corr[i], R * r.corr[i], 50 * kRoundOff));
-  }
+  expect_pbd_invariants_on_random_input<4>(
+      201, 20, random_tetrahedron, random_masses,
+      [](Random& random) { return random.uniform(Real(-0.2), Real(0.2)); }, signed_volume,
+      project, 50 * kRoundOff);
 }
 
 TEST(VolumeConstraint, StaticParticleIsNeverMoved) {
-  Random random(202);
-  for (int trial = 0; trial < 10; ++trial) {
-    const Points x = random_tetrahedron(random);
-    Masses w = random_masses(random);
-    w[trial % 4] = 0;
-    const Projection r = project(x, w, Real(0.3), 1);
-    ASSERT_TRUE(r.ok);
-    EXPECT_EQ(r.corr[trial % 4], Vector3r::Zero());
-  }
+  expect_static_particle_never_moved<4>(202, 10, random_tetrahedron, random_masses, Real(0.3),
+                                        project);
 }
 
 TEST(VolumeConstraint, RepeatedProjectionConvergesMonotonically) {
@@ -162,16 +136,8 @@ TEST(VolumeConstraint, DegenerateInputGivesFalseAndZeroCorrection) {
 }
 
 TEST(XPBDVolumeConstraint, ZeroComplianceEqualsPBDWithStiffnessOne) {
-  Random random(204);
-  for (int trial = 0; trial < 10; ++trial) {
-    const Points x = random_tetrahedron(random);
-    const Masses w = random_masses(random);
-    Real lambda = 0;
-    const Projection xpbd = project_xpbd(x, w, Real(0.1), 0, Real(0.01), lambda);
-    const Projection pbd = project(x, w, Real(0.1), 1);
-    ASSERT_TRUE(xpbd.ok);
-    for (int i = 0; i < 4; ++i) EXPECT_TRUE(near_relative(xpbd.corr[i], pbd.corr[i]));
-  }
+  expect_zero_compliance_equals_pbd<4>(204, 10, random_tetrahedron, random_masses, Real(0.1),
+                                       project, project_xpbd);
 }
 
 TEST(XPBDVolumeConstraint, MultiplierConvergesToComplianceBalance) {

@@ -257,6 +257,78 @@ std::array<Vector3r, N> applied(const std::array<Vector3r, N>& x,
   return y;
 }
 
+/// PBD invariants on random input (seed, `trials` trials): with x = make_points(random),
+/// w = make_masses(random), rest = random_rest(random) and a stiffness in [0.2, 1],
+/// project(x, w, rest, stiffness) succeeds with finite corrections that conserve linear and
+/// angular momentum and are the PBD step of the constraint function f (C = f(x) - rest); under
+/// a random rigid motion f is unchanged (within 50 kRoundOff) and the corrections rotate with
+/// it (within motion_tolerance).
+template <std::size_t N, class MakePoints, class MakeMasses, class RandomRest, class F,
+          class Project>
+void expect_pbd_invariants_on_random_input(unsigned seed, int trials, MakePoints&& make_points,
+                                           MakeMasses&& make_masses, RandomRest&& random_rest,
+                                           F&& f, Project&& project, Real motion_tolerance) {
+  Random random(seed);
+  for (int trial = 0; trial < trials; ++trial) {
+    const std::array<Vector3r, N> x = make_points(random);
+    const std::array<Real, N> w = make_masses(random);
+    const Real rest = random_rest(random);
+    const Real stiffness = random.uniform(Real(0.2), Real(1));
+    const auto r = project(x, w, rest, stiffness);
+    ASSERT_TRUE(r.ok);
+    ASSERT_TRUE(all_finite(r.corr));
+    EXPECT_TRUE(conserves_linear_momentum(r.corr, w));
+    EXPECT_TRUE(conserves_angular_momentum(x, r.corr, w));
+
+    expect_pbd_step(f, x, w, r.corr, f(x) - rest, stiffness);
+
+    const Matrix3r R = random.rotation();
+    const Vector3r t = random.vector(-5, 5);
+    const std::array<Vector3r, N> y = transformed(x, R, t);
+    EXPECT_NEAR(f(y), f(x), 50 * kRoundOff);
+    const auto moved = project(y, w, rest, stiffness);
+    ASSERT_TRUE(moved.ok);
+    for (std::size_t i = 0; i < N; ++i)
+      EXPECT_TRUE(near_relative(moved.corr[i], R * r.corr[i], motion_tolerance));
+  }
+}
+
+/// A static particle is never moved (seed, `trials` trials): with x = make_points(random) and
+/// w = make_masses(random) but w[trial % N] = 0, project(x, w, rest, 1) succeeds and leaves
+/// that particle's correction exactly zero.
+template <std::size_t N, class MakePoints, class MakeMasses, class Project>
+void expect_static_particle_never_moved(unsigned seed, int trials, MakePoints&& make_points,
+                                        MakeMasses&& make_masses, Real rest, Project&& project) {
+  Random random(seed);
+  for (int trial = 0; trial < trials; ++trial) {
+    const std::array<Vector3r, N> x = make_points(random);
+    std::array<Real, N> w = make_masses(random);
+    w[std::size_t(trial) % N] = 0;
+    const auto r = project(x, w, rest, 1);
+    ASSERT_TRUE(r.ok);
+    EXPECT_EQ(r.corr[std::size_t(trial) % N], Vector3r::Zero());
+  }
+}
+
+/// XPBD with zero compliance is PBD with stiffness 1 (seed, `trials` trials): with
+/// x = make_points(random) and w = make_masses(random), project_xpbd(x, w, rest, 0, 0.01, λ = 0)
+/// succeeds with the corrections of project(x, w, rest, 1) to round-off.
+template <std::size_t N, class MakePoints, class MakeMasses, class Project, class ProjectXpbd>
+void expect_zero_compliance_equals_pbd(unsigned seed, int trials, MakePoints&& make_points,
+                                       MakeMasses&& make_masses, Real rest, Project&& project,
+                                       ProjectXpbd&& project_xpbd) {
+  Random random(seed);
+  for (int trial = 0; trial < trials; ++trial) {
+    const std::array<Vector3r, N> x = make_points(random);
+    const std::array<Real, N> w = make_masses(random);
+    Real lambda = 0;
+    const auto xpbd = project_xpbd(x, w, rest, 0, Real(0.01), lambda);
+    const auto pbd = project(x, w, rest, 1);
+    ASSERT_TRUE(xpbd.ok);
+    for (std::size_t i = 0; i < N; ++i) EXPECT_TRUE(near_relative(xpbd.corr[i], pbd.corr[i]));
+  }
+}
+
 /// Near-degenerate input never gives NaN (seed, 300 trials): N points near one point (pattern
 /// trial % patterns: 0 a point, 1 a line, 2 a plane) at each of kNearDegenerateScales, masses
 /// with static particles and rest = random_rest(random); project(x, w, rest, 1) and

@@ -179,12 +179,7 @@ TEST(DihedralBatch, RepeatedProjectionReachesTheRestAngles) {
 
 // ------------------------------------------------------------------ validation at the door
 std::string error_of(const DihedralConstraintInput& input) {
-  try {
-    make_dihedral_constraints(input);
-  } catch (const InvalidInput& error) {
-    return error.what();
-  }
-  return "";
+  return test::error_of([&] { make_dihedral_constraints(input); });
 }
 
 TEST(DihedralBatchValidation, NamesTheConstraintAndTheProblem) {

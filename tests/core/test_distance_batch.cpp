@@ -71,12 +71,7 @@ TEST(DistanceBatch, AllTargetsAvailableIncludeThePortableFallback) {
 
 // ------------------------------------------------------------------ validation at the door
 std::string error_of(const DistanceConstraintInput& input) {
-  try {
-    make_distance_constraints(input);
-  } catch (const InvalidInput& error) {
-    return error.what();
-  }
-  return "";
+  return test::error_of([&] { make_distance_constraints(input); });
 }
 
 TEST(DistanceBatchValidation, NamesTheConstraintAndTheProblem) {

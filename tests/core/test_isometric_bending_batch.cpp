@@ -207,12 +207,7 @@ TEST(IsometricBendingBatch, RepeatedProjectionFlattensTheStencils) {
 
 // ------------------------------------------------------------------ validation at the door
 std::string error_of(const IsometricBendingConstraintInput& input) {
-  try {
-    make_isometric_bending_constraints(input);
-  } catch (const InvalidInput& error) {
-    return error.what();
-  }
-  return "";
+  return test::error_of([&] { make_isometric_bending_constraints(input); });
 }
 
 TEST(IsometricBendingBatchValidation, NamesTheConstraintAndTheProblem) {

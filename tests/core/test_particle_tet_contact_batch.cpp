@@ -270,12 +270,7 @@ TEST(ParticleTetContactBatch, PenetrationIsResolvedAndSeparationKept) {
 
 // ------------------------------------------------------------------ validation at the door
 std::string error_of(const ParticleTetContactInput& input, const ParticleState& state) {
-  try {
-    make_particle_tet_contacts(input, state);
-  } catch (const InvalidInput& error) {
-    return error.what();
-  }
-  return "";
+  return test::error_of([&] { make_particle_tet_contacts(input, state); });
 }
 
 TEST(ParticleTetContactBatchValidation, NamesTheContactAndTheProblem) {

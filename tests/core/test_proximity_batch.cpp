@@ -522,12 +522,7 @@ TEST(ProximityBatch, EdgeEdgeConvergesToTheRestDistance) {
 
 template <class Family>
 std::string error_of(const typename Family::Input& input) {
-  try {
-    Family::make(input);
-  } catch (const InvalidInput& error) {
-    return error.what();
-  }
-  return "";
+  return test::error_of([&] { Family::make(input); });
 }
 
 template <class Family>

@@ -245,12 +245,7 @@ TEST(ShapeMatchingBatch, BitwiseReproducibleAndStaticParticlesUntouched) {
 
 // ------------------------------------------------------------------ validation at the door
 std::string error_of(const ShapeMatchingInput& input) {
-  try {
-    make_shape_matching_constraints(input);
-  } catch (const InvalidInput& error) {
-    return error.what();
-  }
-  return "";
+  return test::error_of([&] { make_shape_matching_constraints(input); });
 }
 
 TEST(ShapeMatchingBatchValidation, NamesTheClusterAndTheProblem) {

@@ -269,15 +269,7 @@ TEST(StrainBatch, BitwiseReproducibleAndStaticParticlesUntouched) {
 }
 
 // ------------------------------------------------------------------ validation at the door
-template <class Make>
-std::string error_of(Make&& make) {
-  try {
-    make();
-  } catch (const InvalidInput& error) {
-    return error.what();
-  }
-  return "";
-}
+using test::error_of;
 
 TEST(StrainBatchValidation, NamesTheConstraintAndTheProblem) {
   const std::vector<Vector3r> rest = {Vector3r(0, 0, 0), Vector3r(1, 0, 0), Vector3r(0, 1, 0),

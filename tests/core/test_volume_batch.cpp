@@ -140,12 +140,7 @@ TEST(VolumeBatch, RepeatedProjectionReachesTheRestVolumes) {
 
 // ------------------------------------------------------------------ validation at the door
 std::string error_of(const VolumeConstraintInput& input) {
-  try {
-    make_volume_constraints(input);
-  } catch (const InvalidInput& error) {
-    return error.what();
-  }
-  return "";
+  return test::error_of([&] { make_volume_constraints(input); });
 }
 
 TEST(VolumeBatchValidation, NamesTheConstraintAndTheProblem) {

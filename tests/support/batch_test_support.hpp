@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <tessera/core/constraint_batch.hpp>
+#include <tessera/core/error.hpp>
 #include <tessera/core/particle_state.hpp>
 #include <tessera/core/simd.hpp>
 
@@ -144,6 +145,18 @@ void project_scalar_range(const DisjointConstraintSet<N>& set, std::size_t begin
     for (int k = 0; k < N; ++k)
       if (w[i[k]] > 0) expected[i[k]] += corr[k];
   }
+}
+
+/// The message of the InvalidInput that make() throws, or "" when it throws none (the
+/// validation tests of the batch builders).
+template <class Make>
+std::string error_of(Make&& make) {
+  try {
+    make();
+  } catch (const InvalidInput& error) {
+    return error.what();
+  }
+  return "";
 }
 
 // ------------------------------------------------------------ the tests every family repeats

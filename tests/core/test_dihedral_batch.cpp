@@ -55,20 +55,11 @@ test::DisjointConstraintSet<4> random_set(Random& random, std::size_t count) {
 /// [0, 2.8] and is rarely the current angle). A constraint on a shared static particle is
 /// translated so that particle's rest position is its (one) current position.
 std::vector<Vector3r> rest_positions(const test::DisjointConstraintSet<4>& set, Random& random) {
-  std::vector<Vector3r> rest = set.positions;
-  std::vector<int> uses(set.positions.size(), 0);
-  for (ParticleIndex i : set.indices) ++uses[i];
-  for (std::size_t c = 0; c < set.count; ++c) {
-    const Stencil s = hinge(random.uniform(0, Real(2.8)));
-    Vector3r shift = set.positions[set.indices[4 * c + 2]] - s[2];
-    for (std::size_t k = 0; k < 4; ++k)
-      if (uses[set.indices[4 * c + k]] > 1) shift = set.positions[set.indices[4 * c + k]] - s[k];
-    for (std::size_t k = 0; k < 4; ++k) {
-      const ParticleIndex p = set.indices[4 * c + k];
-      if (uses[p] == 1) rest[p] = s[k] + shift;
-    }
-  }
-  return rest;
+  return test::translated_rest_stencils<4>(
+      set, random, [](Random& r) { return hinge(r.uniform(0, Real(2.8))); },
+      [&](std::size_t c, const Stencil& s) -> Vector3r {
+        return set.positions[set.indices[4 * c + 2]] - s[2];
+      });
 }
 
 DihedralConstraints build(const test::DisjointConstraintSet<4>& set, Random& random) {

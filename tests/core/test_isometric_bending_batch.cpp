@@ -52,20 +52,9 @@ test::DisjointConstraintSet<4> random_set(Random& random, std::size_t count) {
 /// only up to round-off has rounding-noise gradients, and its projection depends on the
 /// evaluation order; the exactly flat case is FlatStencilsAreLeftAlone.)
 std::vector<Vector3r> rest_positions(const test::DisjointConstraintSet<4>& set, Random& random) {
-  std::vector<Vector3r> rest = set.positions;
-  std::vector<int> uses(set.positions.size(), 0);
-  for (ParticleIndex i : set.indices) ++uses[i];
-  for (std::size_t c = 0; c < set.count; ++c) {
-    const Stencil s = random_planar_stencil(random);
-    Vector3r shift = Vector3r::Zero();
-    for (std::size_t k = 0; k < 4; ++k)
-      if (uses[set.indices[4 * c + k]] > 1) shift = set.positions[set.indices[4 * c + k]] - s[k];
-    for (std::size_t k = 0; k < 4; ++k) {
-      const ParticleIndex p = set.indices[4 * c + k];
-      if (uses[p] == 1) rest[p] = s[k] + shift;
-    }
-  }
-  return rest;
+  return test::translated_rest_stencils<4>(
+      set, random, [](Random& r) { return random_planar_stencil(r); },
+      [](std::size_t, const Stencil&) -> Vector3r { return Vector3r::Zero(); });
 }
 
 IsometricBendingConstraints build(const test::DisjointConstraintSet<4>& set, Random& random) {

@@ -101,6 +101,32 @@ DisjointConstraintSet<N> make_disjoint_constraints(Random& random, std::size_t c
   return set;
 }
 
+/// Rest positions from one random rest stencil per constraint: each particle that only one
+/// constraint uses gets slot k of make_stencil(random) (drawn for every constraint in order)
+/// plus a shift. The shift is default_shift(c, stencil), except on a constraint with a slot on
+/// a shared static particle, where it moves that slot's stencil point onto the particle's
+/// (one) position. Particles used by several constraints keep their current positions.
+template <int N, class MakeStencil, class DefaultShift>
+std::vector<Vector3r> translated_rest_stencils(const DisjointConstraintSet<N>& set,
+                                               Random& random, MakeStencil&& make_stencil,
+                                               DefaultShift&& default_shift) {
+  std::vector<Vector3r> rest = set.positions;
+  std::vector<int> uses(set.positions.size(), 0);
+  for (ParticleIndex i : set.indices) ++uses[i];
+  for (std::size_t c = 0; c < set.count; ++c) {
+    const std::array<Vector3r, N> s = make_stencil(random);
+    Vector3r shift = default_shift(c, s);
+    const ParticleIndex* i = &set.indices[std::size_t(N) * c];
+    for (std::size_t k = 0; k < std::size_t(N); ++k)
+      if (uses[i[k]] > 1) shift = set.positions[i[k]] - s[k];
+    for (std::size_t k = 0; k < std::size_t(N); ++k) {
+      const ParticleIndex p = i[k];
+      if (uses[p] == 1) rest[p] = s[k] + shift;
+    }
+  }
+  return rest;
+}
+
 /// A random sub-range [begin, end) of [0, count) whose length is not a multiple of lanes
 /// (unless count is too small for that).
 inline std::pair<std::size_t, std::size_t> random_range(Random& random, std::size_t count) {

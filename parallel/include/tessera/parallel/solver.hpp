@@ -1,0 +1,165 @@
+// The solver: XPBD (or PBD) time stepping of a Model over its Schedule.
+//
+//   per substep (h = time_step / substeps):
+//     v += h·g, x_prev = x, x += h·v          (movable particles; parallel over particles)
+//     λ = 0
+//     iterations × project                     (mode: see SolverMode in schedule.hpp)
+//       gs:     for each colour phase: parallel_for over its blocks → batched SIMD kernel
+//       jacobi: copy in → all blocks at once → per-particle averaged sum
+//       hybrid: the gs phases, then one Jacobi phase for the small colours
+//       sequential: every constraint in input order through the scalar API, one thread
+//     v = (x − x_prev)/h · max(0, 1 − damping·h)
+//
+// Threads: every parallel loop runs in the solver's own tbb::task_arena of `threads`
+// workers; no global TBB state is touched. Any thread count gives bitwise the same positions:
+// a colour's constraints share no movable particle, each SIMD lane's arithmetic does not
+// depend on its neighbours, block boundaries are fixed by the schedule, and the Jacobi sums
+// run in the schedule's fixed order.
+//
+// Numbering: the solver keeps particles in the schedule's order (the colouring's locality
+// order); everything public takes and returns the user's particle numbers and global
+// constraint ids (see Model).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <oneapi/tbb/task_arena.h>
+
+#include <tessera/coloring/colouring.hpp>
+#include <tessera/core/constraint_batch.hpp>
+#include <tessera/core/particle_state.hpp>
+#include <tessera/core/real.hpp>
+#include <tessera/parallel/model.hpp>
+#include <tessera/parallel/residual.hpp>
+#include <tessera/parallel/schedule.hpp>
+
+namespace tessera {
+
+/// Jacobi over-relaxation ω when nothing else is said (see the README for the measurement).
+inline constexpr Real kDefaultJacobiRelaxation = Real(1);
+
+struct SolverSettings {
+  SolverMode mode = SolverMode::gs;
+  /// Worker threads; 0 takes every hardware thread TBB reports.
+  std::size_t threads = 0;
+  /// XPBD compliance (default) or PBD stiffness.
+  ConstraintSemantics semantics = ConstraintSemantics::compliance;
+  /// Length of one step() and the substeps it is split into.
+  Real time_step = Real(1) / Real(60);
+  std::size_t substeps = 1;
+  /// Projection sweeps per substep.
+  std::size_t iterations = 10;
+  Vector3r gravity = Vector3r(0, Real(-9.81), 0);
+  /// Fraction of the velocity removed per second (v ← v · max(0, 1 − damping · h)); ≥ 0.
+  Real velocity_damping = 0;
+  /// Jacobi over-relaxation ω (jacobi and hybrid modes), in (0, 2).
+  Real jacobi_relaxation = kDefaultJacobiRelaxation;
+  /// Constraints per parallel work block and the hybrid mode's colour-size threshold.
+  std::size_t block_size = kDefaultBlockSize;
+  std::size_t hybrid_threshold = kDefaultHybridThreshold;
+  /// Residual before and after the last substep's iterations of every step (StepReport).
+  bool report_residuals = true;
+  /// Also the residual after every iteration of the last substep (convergence history).
+  bool record_convergence = false;
+};
+
+/// What the last step() measured.
+struct StepReport {
+  /// At the start of the last substep's iterations (after prediction) and after them.
+  Residual residual_before;
+  Residual residual_after;
+  /// record_convergence: history[i] is the residual after i iterations (history[0] = before).
+  std::vector<Residual> history;
+};
+
+struct SolverStatistics {
+  std::size_t particles = 0;
+  std::array<std::size_t, kConstraintFamilyCount> constraints_per_family{};
+  std::size_t constraints = 0;
+  /// Colours run as Gauss–Seidel phases, their sizes, and the constraints of the Jacobi set.
+  std::size_t coloured_phases = 0;
+  std::vector<std::size_t> phase_sizes;
+  std::size_t jacobi_constraints = 0;
+  std::size_t threads = 0;
+  double seconds_schedule = 0;
+  /// Time spent projecting (iterations only) and in whole steps, since construction.
+  double seconds_projection = 0;
+  double seconds_stepping = 0;
+  /// Constraint projections done (constraints × iterations × substeps × steps).
+  std::uint64_t projections = 0;
+  std::uint64_t steps = 0;
+};
+
+class Solver {
+ public:
+  /// Builds the schedule of `model` from `colouring` (which must colour
+  /// model.constraint_graph()). Mode sequential ignores the colouring. Throws InvalidInput
+  /// for bad settings (time step ≤ 0 or not finite, 0 substeps, damping < 0, ω outside
+  /// (0, 2), block size 0) or a colouring that does not fit the model.
+  Solver(Model model, const Colouring& colouring, const SolverSettings& settings);
+  /// Mode sequential only (no colouring needed); InvalidInput for any other mode.
+  Solver(Model model, const SolverSettings& settings);
+  ~Solver();
+  Solver(Solver&&) noexcept;
+  Solver& operator=(Solver&&) noexcept;
+
+  /// One time step of settings().time_step, in settings().substeps substeps.
+  void step();
+  /// `iterations` projection sweeps at the current positions, with no time integration
+  /// (λ kept from before; call reset_lambdas() first for a fresh XPBD solve). For tests,
+  /// quasi-static solves and benchmarks; `dt` is the compliance time step.
+  void project(std::size_t iterations, Real dt);
+  void reset_lambdas();
+
+  /// The normalised constraint violation now (see residual.hpp).
+  Residual residual();
+
+  const StepReport& last_step() const { return report_; }
+  const SolverStatistics& statistics() const { return statistics_; }
+  const SolverSettings& settings() const { return settings_; }
+  const Schedule& schedule() const { return schedule_; }
+
+  /// Particles in the user's numbering.
+  std::size_t particle_count() const { return state_.size(); }
+  Vector3r position(ParticleIndex particle) const;
+  Vector3r velocity(ParticleIndex particle) const;
+  Real inverse_mass(ParticleIndex particle) const;
+  std::vector<Vector3r> positions() const;
+  std::vector<Vector3r> velocities() const;
+  /// Moves a particle (a kinematic, static one between steps, or any particle to reset it).
+  void set_position(ParticleIndex particle, const Vector3r& position);
+  void set_velocity(ParticleIndex particle, const Vector3r& velocity);
+  /// The XPBD multiplier of a constraint (global id); 0 for families without one.
+  Real lambda(ConstraintIndex constraint) const;
+
+  /// The particles in the schedule's numbering, for code that works on the arrays.
+  const ParticleState& scheduled_state() const { return state_; }
+
+ private:
+  void check_particle(ParticleIndex particle) const;
+  void integrate(Real h);
+  void update_velocities(Real h);
+  void iterate(const ProjectionSettings& projection);
+  void run_blocks(std::span<const ScheduleBlock> blocks, ParticleArrays particles,
+                  ConstraintSets& sets, const ProjectionSettings& projection);
+  void jacobi_iteration(const ProjectionSettings& projection);
+  void copy_incidences_in();
+  template <class Body>
+  void parallel_chunks(std::size_t count, std::size_t chunk, Body&& body);
+
+  SolverSettings settings_;
+  Schedule schedule_;
+  ParticleState state_;
+  /// The Jacobi set's private particle copies.
+  AlignedVector<Real> incidence_x_, incidence_y_, incidence_z_, incidence_inverse_mass_;
+  std::unique_ptr<tbb::task_arena> arena_;
+  StepReport report_;
+  SolverStatistics statistics_;
+};
+
+}  // namespace tessera

@@ -1,0 +1,91 @@
+// Residual sums: per-constraint measures from core (constraint_residual), summed per range
+// and combined in range order.
+#include <tessera/parallel/residual.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <tessera/core/constraint_residual.hpp>
+
+#include "constraint_family.hpp"
+#include "residual_sum.hpp"
+
+namespace tessera {
+
+namespace detail {
+
+std::vector<ResidualRange> residual_ranges(const Schedule& schedule, std::size_t chunk) {
+  std::vector<ResidualRange> ranges;
+  const auto add = [&](ConstraintFamily family, bool jacobi, std::size_t begin, std::size_t end) {
+    for (std::size_t b = begin; b < end; b += chunk)
+      ranges.push_back({family, jacobi, std::uint32_t(b), std::uint32_t(std::min(end, b + chunk))});
+  };
+  const auto jacobi_sizes = schedule.jacobi().constraints.sizes();
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+    for (const ScheduleBlock& r : schedule.coloured_ranges(ConstraintFamily(f)))
+      add(r.family, false, r.begin, r.end);
+    add(ConstraintFamily(f), true, 0, jacobi_sizes[f]);
+  }
+  return ranges;
+}
+
+ResidualPartial residual_of_range(const ResidualRange& range, const ConstraintSets& sets,
+                                  const ParticleArrays& particles) {
+  ResidualPartial partial;
+  sets.for_each([&](ConstraintFamily family, const auto& batch) {
+    if (family != range.family) return;
+    for (std::size_t c = range.begin; c < range.end; ++c) {
+      const double r = double(constraint_residual(particles, batch, c));
+      partial.sum_of_squares += r * r;
+      partial.max = std::max(partial.max, r);
+    }
+  });
+  return partial;
+}
+
+Residual combine_residual(std::span<const ResidualRange> ranges,
+                          std::span<const ResidualPartial> partials) {
+  Residual result;
+  std::array<double, kConstraintFamilyCount> sums{};
+  double total = 0;
+  for (std::size_t i = 0; i < ranges.size(); ++i) {
+    const std::size_t f = std::size_t(ranges[i].family);
+    FamilyResidual& family = result.families[f];
+    family.constraints += ranges[i].end - ranges[i].begin;
+    family.max = std::max(family.max, partials[i].max);
+    sums[f] += partials[i].sum_of_squares;
+  }
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+    FamilyResidual& family = result.families[f];
+    if (family.constraints == 0) continue;
+    family.rms = std::sqrt(sums[f] / double(family.constraints));
+    result.constraints += family.constraints;
+    result.max = std::max(result.max, family.max);
+    total += sums[f];
+  }
+  if (result.constraints != 0) result.rms = std::sqrt(total / double(result.constraints));
+  return result;
+}
+
+}  // namespace detail
+
+std::string format_residual(const Residual& residual) {
+  char buffer[128];
+  std::snprintf(buffer, sizeof buffer, "rms %.3g, max %.3g", residual.rms, residual.max);
+  std::string text = buffer;
+  const char* separator = " (";
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+    const FamilyResidual& family = residual.families[f];
+    if (family.constraints == 0) continue;
+    std::snprintf(buffer, sizeof buffer, "%s rms %.3g, max %.3g",
+                  std::string(family_name(ConstraintFamily(f))).c_str(), family.rms, family.max);
+    text += separator;
+    text += buffer;
+    separator = "; ";
+  }
+  if (*separator == ';') text += ")";
+  return text;
+}
+
+}  // namespace tessera

@@ -1,0 +1,41 @@
+// The residual's building blocks, shared by the solver: the partial sums of one range of a
+// family's batch, and their combination in a fixed order (so the result does not depend on
+// how the ranges were spread over threads).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <tessera/parallel/residual.hpp>
+#include <tessera/parallel/schedule.hpp>
+
+namespace tessera::detail {
+
+/// Constraints [begin, end) of one family of the coloured batches or of the Jacobi set.
+struct ResidualRange {
+  ConstraintFamily family;
+  bool jacobi;
+  std::uint32_t begin;
+  std::uint32_t end;
+};
+
+struct ResidualPartial {
+  double sum_of_squares = 0;
+  double max = 0;
+};
+
+/// Every real constraint of the schedule, in ranges of at most `chunk` constraints.
+std::vector<ResidualRange> residual_ranges(const Schedule& schedule, std::size_t chunk);
+
+/// The partial sums of one range, at `particles` (the Jacobi set's ranges are evaluated at
+/// its incidence copies, which must hold the current positions).
+ResidualPartial residual_of_range(const ResidualRange& range, const ConstraintSets& sets,
+                                  const ParticleArrays& particles);
+
+/// Sums the partials (one per range, same order) family by family.
+Residual combine_residual(std::span<const ResidualRange> ranges,
+                          std::span<const ResidualPartial> partials);
+
+}  // namespace tessera::detail

@@ -1,0 +1,397 @@
+// The solver's loops (see solver.hpp for the step and schedule.hpp for the layout). Every
+// parallel loop is a parallel_for over a fixed list of work items (blocks of a phase,
+// chunks of particles or incidences) with a static partitioner inside the solver's arena:
+// the items are fixed by the schedule, so results do not depend on the thread count, and a
+// static split gives each worker the same items every iteration (its particles stay in its
+// cache).
+#include <tessera/parallel/solver.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/info.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/partitioner.h>
+
+#include <tessera/core/error.hpp>
+#include <tessera/core/sequential_projection.hpp>
+
+#include "constraint_family.hpp"
+#include "residual_sum.hpp"
+
+namespace tessera {
+
+namespace {
+
+/// Particles (or incidences) per parallel chunk of the element-wise loops.
+constexpr std::size_t kParticleChunk = 4096;
+/// Constraints per chunk of the residual sums.
+constexpr std::size_t kResidualChunk = 2048;
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+void check_settings(const SolverSettings& s) {
+  if (!(std::isfinite(s.time_step) && s.time_step > 0))
+    throw InvalidInput("solver settings: time step must be positive and finite (got " +
+                       std::to_string(s.time_step) + ")");
+  if (s.substeps == 0) throw InvalidInput("solver settings: substeps must be at least 1");
+  if (!(std::isfinite(s.velocity_damping) && s.velocity_damping >= 0))
+    throw InvalidInput("solver settings: velocity damping must be >= 0 and finite (got " +
+                       std::to_string(s.velocity_damping) + ")");
+  if (!(s.jacobi_relaxation > 0 && s.jacobi_relaxation < 2))
+    throw InvalidInput("solver settings: Jacobi relaxation must be in (0, 2) (got " +
+                       std::to_string(s.jacobi_relaxation) + ")");
+  if (s.block_size == 0) throw InvalidInput("solver settings: block size must be at least 1");
+  if (!s.gravity.allFinite()) throw InvalidInput("solver settings: gravity is not finite");
+}
+
+/// The model's particles renumbered into the schedule's order.
+ParticleState scheduled_particles(const ParticleState& user, const Schedule& schedule) {
+  const std::size_t n = user.size();
+  if (schedule.particle_new_to_old().empty()) return user;
+  ParticleState state(n);
+  const auto to_user = schedule.particle_new_to_old();
+  const auto copy = [&](AlignedVector<Real>& to, const AlignedVector<Real>& from) {
+    for (std::size_t p = 0; p < n; ++p) to[p] = from[to_user[p]];
+  };
+  copy(state.x, user.x);
+  copy(state.y, user.y);
+  copy(state.z, user.z);
+  copy(state.inverse_mass, user.inverse_mass);
+  copy(state.previous_x, user.previous_x);
+  copy(state.previous_y, user.previous_y);
+  copy(state.previous_z, user.previous_z);
+  copy(state.velocity_x, user.velocity_x);
+  copy(state.velocity_y, user.velocity_y);
+  copy(state.velocity_z, user.velocity_z);
+  return state;
+}
+
+/// The batched kernel of each family behind one signature: the solver's dispatch table.
+using ProjectBlock = void (*)(ParticleArrays, ConstraintSets&, std::size_t, std::size_t,
+                              const ProjectionSettings&);
+
+template <ConstraintFamily Family>
+void project_family(ParticleArrays particles, ConstraintSets& sets, std::size_t begin,
+                    std::size_t end, const ProjectionSettings& settings) {
+  sets.for_each([&](ConstraintFamily family, auto& batch) {
+    if constexpr (requires { batch.size(); })
+      if (family == Family) detail::project_batch(particles, batch, begin, end, settings);
+  });
+}
+
+template <std::size_t... F>
+constexpr std::array<ProjectBlock, kConstraintFamilyCount> make_dispatch_table(
+    std::index_sequence<F...>) {
+  return {&project_family<ConstraintFamily(F)>...};
+}
+constexpr auto kProjectBlock =
+    make_dispatch_table(std::make_index_sequence<kConstraintFamilyCount>());
+
+}  // namespace
+
+Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& settings)
+    : settings_(settings) {
+  check_settings(settings_);
+  const auto start = Clock::now();
+  schedule_ = Schedule(model, &colouring,
+                       {settings_.mode, settings_.block_size, settings_.hybrid_threshold});
+  state_ = scheduled_particles(model.particles, schedule_);
+  const std::size_t incidences = schedule_.jacobi().incidence_count;
+  incidence_x_.assign(incidences, 0);
+  incidence_y_.assign(incidences, 0);
+  incidence_z_.assign(incidences, 0);
+  incidence_inverse_mass_.assign(incidences, 0);
+  for (std::size_t i = 0; i < incidences; ++i)
+    incidence_inverse_mass_[i] = state_.inverse_mass[schedule_.jacobi().incidence_particle[i]];
+  statistics_.seconds_schedule = seconds_since(start);
+
+  const std::size_t threads = settings_.mode == SolverMode::sequential ? 1
+                              : settings_.threads == 0
+                                  ? std::size_t(tbb::info::default_concurrency())
+                                  : settings_.threads;
+  arena_ = std::make_unique<tbb::task_arena>(int(threads));
+  statistics_.threads = threads;
+  statistics_.particles = state_.size();
+  statistics_.constraints_per_family = model.constraints.sizes();
+  statistics_.constraints = model.constraints.size();
+  statistics_.coloured_phases = schedule_.phase_count();
+  statistics_.phase_sizes.assign(schedule_.phase_sizes().begin(), schedule_.phase_sizes().end());
+  statistics_.jacobi_constraints = schedule_.jacobi().constraint_count;
+}
+
+Solver::Solver(Model model, const SolverSettings& settings)
+    : Solver(std::move(model),
+             [&]() -> const Colouring& {
+               if (settings.mode != SolverMode::sequential)
+                 throw InvalidInput("solver: mode " +
+                                    std::string(solver_mode_name(settings.mode)) +
+                                    " needs a colouring");
+               static const Colouring kNone;
+               return kNone;
+             }(),
+             settings) {}
+
+Solver::~Solver() = default;
+Solver::Solver(Solver&&) noexcept = default;
+Solver& Solver::operator=(Solver&&) noexcept = default;
+
+template <class Body>
+void Solver::parallel_chunks(std::size_t count, std::size_t chunk, Body&& body) {
+  const std::size_t chunks = (count + chunk - 1) / chunk;
+  if (chunks <= 1) {
+    if (count != 0) body(std::size_t(0), count);
+    return;
+  }
+  arena_->execute([&] {
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, chunks, 1),
+        [&](const tbb::blocked_range<std::size_t>& r) {
+          for (std::size_t k = r.begin(); k != r.end(); ++k)
+            body(k * chunk, std::min(count, (k + 1) * chunk));
+        },
+        tbb::static_partitioner());
+  });
+}
+
+void Solver::run_blocks(std::span<const ScheduleBlock> blocks, ParticleArrays particles,
+                        ConstraintSets& sets, const ProjectionSettings& projection) {
+  parallel_chunks(blocks.size(), 1, [&](std::size_t first, std::size_t last) {
+    for (std::size_t b = first; b < last; ++b) {
+      const ScheduleBlock& block = blocks[b];
+      kProjectBlock[std::size_t(block.family)](particles, sets, block.begin, block.end,
+                                               projection);
+    }
+  });
+}
+
+void Solver::copy_incidences_in() {
+  const JacobiSet& jacobi = schedule_.jacobi();
+  const ParticleIndex* particle = jacobi.incidence_particle.data();
+  parallel_chunks(jacobi.incidence_count, kParticleChunk, [&](std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) {
+      incidence_x_[i] = state_.x[particle[i]];
+      incidence_y_[i] = state_.y[particle[i]];
+      incidence_z_[i] = state_.z[particle[i]];
+    }
+  });
+}
+
+void Solver::jacobi_iteration(const ProjectionSettings& projection) {
+  JacobiSet& jacobi = schedule_.jacobi();
+  if (jacobi.constraint_count == 0) return;
+  copy_incidences_in();
+  const ParticleArrays incidences{incidence_x_.data(), incidence_y_.data(), incidence_z_.data(),
+                                  incidence_inverse_mass_.data(), jacobi.incidence_count};
+  run_blocks(jacobi.blocks, incidences, jacobi.constraints, projection);
+  const Real omega = settings_.jacobi_relaxation;
+  parallel_chunks(jacobi.particles.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
+    for (std::size_t k = first; k < last; ++k) {
+      const ParticleIndex p = jacobi.particles[k];
+      const std::uint32_t begin = jacobi.particle_offsets[k], end = jacobi.particle_offsets[k + 1];
+      const Real x = state_.x[p], y = state_.y[p], z = state_.z[p];
+      Real dx = 0, dy = 0, dz = 0;
+      for (std::uint32_t j = begin; j < end; ++j) {
+        const std::uint32_t i = jacobi.particle_incidences[j];
+        dx += incidence_x_[i] - x;
+        dy += incidence_y_[i] - y;
+        dz += incidence_z_[i] - z;
+      }
+      const Real scale = omega / Real(end - begin);
+      state_.x[p] = x + scale * dx;
+      state_.y[p] = y + scale * dy;
+      state_.z[p] = z + scale * dz;
+    }
+  });
+}
+
+void Solver::iterate(const ProjectionSettings& projection) {
+  ParticleArrays particles = ParticleArrays::of(state_);
+  if (settings_.mode == SolverMode::sequential) {
+    schedule_.coloured().for_each([&](ConstraintFamily, auto& batch) {
+      if (batch.size() != 0) project_sequentially(particles, batch, 0, batch.size(), projection);
+    });
+    return;
+  }
+  for (std::size_t phase = 0; phase < schedule_.phase_count(); ++phase)
+    run_blocks(schedule_.phase_blocks(phase), particles, schedule_.coloured(), projection);
+  jacobi_iteration(projection);
+}
+
+void Solver::project(std::size_t iterations, Real dt) {
+  if (!(std::isfinite(dt) && dt > 0))
+    throw InvalidInput("solver: projection time step must be positive and finite (got " +
+                       std::to_string(dt) + ")");
+  const ProjectionSettings projection{settings_.semantics, dt};
+  const auto start = Clock::now();
+  for (std::size_t it = 0; it < iterations; ++it) iterate(projection);
+  statistics_.seconds_projection += seconds_since(start);
+  statistics_.projections += std::uint64_t(iterations) * statistics_.constraints;
+}
+
+void Solver::reset_lambdas() {
+  const auto reset = [](ConstraintFamily, auto& batch) {
+    if (Real* lambda = detail::lambda_of(batch))
+      std::fill(lambda, lambda + padded_size(batch.size()), Real(0));
+  };
+  schedule_.coloured().for_each(reset);
+  schedule_.jacobi().constraints.for_each(reset);
+}
+
+void Solver::integrate(Real h) {
+  const Real gx = settings_.gravity.x() * h, gy = settings_.gravity.y() * h,
+             gz = settings_.gravity.z() * h;
+  parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) {
+      state_.previous_x[i] = state_.x[i];
+      state_.previous_y[i] = state_.y[i];
+      state_.previous_z[i] = state_.z[i];
+      if (!(state_.inverse_mass[i] > 0)) continue;
+      state_.velocity_x[i] += gx;
+      state_.velocity_y[i] += gy;
+      state_.velocity_z[i] += gz;
+      state_.x[i] += h * state_.velocity_x[i];
+      state_.y[i] += h * state_.velocity_y[i];
+      state_.z[i] += h * state_.velocity_z[i];
+    }
+  });
+}
+
+void Solver::update_velocities(Real h) {
+  const Real scale = std::max(Real(0), Real(1) - settings_.velocity_damping * h) / h;
+  parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) {
+      if (!(state_.inverse_mass[i] > 0)) {
+        state_.velocity_x[i] = state_.velocity_y[i] = state_.velocity_z[i] = 0;
+        continue;
+      }
+      state_.velocity_x[i] = (state_.x[i] - state_.previous_x[i]) * scale;
+      state_.velocity_y[i] = (state_.y[i] - state_.previous_y[i]) * scale;
+      state_.velocity_z[i] = (state_.z[i] - state_.previous_z[i]) * scale;
+    }
+  });
+}
+
+void Solver::step() {
+  const auto start = Clock::now();
+  const Real h = settings_.time_step / Real(settings_.substeps);
+  const ProjectionSettings projection{settings_.semantics, h};
+  report_.history.clear();
+  for (std::size_t substep = 0; substep < settings_.substeps; ++substep) {
+    const bool last = substep + 1 == settings_.substeps;
+    integrate(h);
+    reset_lambdas();
+    if (last && settings_.report_residuals) report_.residual_before = residual();
+    if (last && settings_.record_convergence) report_.history.push_back(report_.residual_before);
+    const auto projection_start = Clock::now();
+    for (std::size_t it = 0; it < settings_.iterations; ++it) {
+      iterate(projection);
+      if (last && settings_.record_convergence) {
+        statistics_.seconds_projection += seconds_since(projection_start);
+        report_.history.push_back(residual());
+      }
+    }
+    if (!(last && settings_.record_convergence))
+      statistics_.seconds_projection += seconds_since(projection_start);
+    statistics_.projections += std::uint64_t(settings_.iterations) * statistics_.constraints;
+    update_velocities(h);
+    if (last && settings_.report_residuals) report_.residual_after = residual();
+  }
+  ++statistics_.steps;
+  statistics_.seconds_stepping += seconds_since(start);
+}
+
+Residual Solver::residual() {
+  const auto ranges = detail::residual_ranges(schedule_, kResidualChunk);
+  std::vector<detail::ResidualPartial> partials(ranges.size());
+  if (schedule_.jacobi().constraint_count != 0) copy_incidences_in();
+  const ParticleArrays particles = ParticleArrays::of(state_);
+  const ParticleArrays incidences{incidence_x_.data(), incidence_y_.data(), incidence_z_.data(),
+                                  incidence_inverse_mass_.data(),
+                                  schedule_.jacobi().incidence_count};
+  parallel_chunks(ranges.size(), 1, [&](std::size_t first, std::size_t last) {
+    for (std::size_t k = first; k < last; ++k) {
+      const auto& range = ranges[k];
+      partials[k] = range.jacobi
+                        ? detail::residual_of_range(range, schedule_.jacobi().constraints, incidences)
+                        : detail::residual_of_range(range, schedule_.coloured(), particles);
+    }
+  });
+  return detail::combine_residual(ranges, partials);
+}
+
+void Solver::check_particle(ParticleIndex particle) const {
+  if (particle >= state_.size())
+    throw InvalidInput("particle " + std::to_string(particle) + " does not exist (the model has " +
+                       std::to_string(state_.size()) + ")");
+}
+
+Vector3r Solver::position(ParticleIndex particle) const {
+  check_particle(particle);
+  return state_.position(schedule_.scheduled_particle(particle));
+}
+
+Vector3r Solver::velocity(ParticleIndex particle) const {
+  check_particle(particle);
+  return state_.velocity(schedule_.scheduled_particle(particle));
+}
+
+Real Solver::inverse_mass(ParticleIndex particle) const {
+  check_particle(particle);
+  return state_.inverse_mass[schedule_.scheduled_particle(particle)];
+}
+
+std::vector<Vector3r> Solver::positions() const {
+  std::vector<Vector3r> result(state_.size());
+  for (std::size_t p = 0; p < result.size(); ++p)
+    result[schedule_.user_particle(ParticleIndex(p))] = state_.position(p);
+  return result;
+}
+
+std::vector<Vector3r> Solver::velocities() const {
+  std::vector<Vector3r> result(state_.size());
+  for (std::size_t p = 0; p < result.size(); ++p)
+    result[schedule_.user_particle(ParticleIndex(p))] = state_.velocity(p);
+  return result;
+}
+
+void Solver::set_position(ParticleIndex particle, const Vector3r& position) {
+  check_particle(particle);
+  if (!position.allFinite())
+    throw InvalidInput("particle " + std::to_string(particle) + ": position is not finite");
+  state_.set_position(schedule_.scheduled_particle(particle), position);
+}
+
+void Solver::set_velocity(ParticleIndex particle, const Vector3r& velocity) {
+  check_particle(particle);
+  if (!velocity.allFinite())
+    throw InvalidInput("particle " + std::to_string(particle) + ": velocity is not finite");
+  const ParticleIndex p = schedule_.scheduled_particle(particle);
+  state_.velocity_x[p] = velocity.x();
+  state_.velocity_y[p] = velocity.y();
+  state_.velocity_z[p] = velocity.z();
+}
+
+Real Solver::lambda(ConstraintIndex constraint) const {
+  const ConstraintLocation where = schedule_.locate(constraint);
+  Real result = 0;
+  const auto read = [&](ConstraintFamily family, auto& batch) {
+    if (family != where.family) return;
+    if (const Real* lambda = detail::lambda_of(batch)) result = lambda[where.slot];
+  };
+  auto& sets = const_cast<Schedule&>(schedule_);
+  if (where.in_jacobi_set)
+    sets.jacobi().constraints.for_each(read);
+  else
+    sets.coloured().for_each(read);
+  return result;
+}
+
+}  // namespace tessera

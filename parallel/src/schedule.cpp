@@ -283,6 +283,27 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
   for (std::size_t i = 0; i < jacobi_.incidence_count; ++i)
     if (real_incidence[i] && movable(jacobi_.incidence_particle[i]))
       jacobi_.particle_incidences[start[jacobi_.incidence_particle[i]]++] = std::uint32_t(i);
+
+  // λ shares: the mean count over each constraint's movable incidences.
+  jacobi_.constraints.for_each([&](ConstraintFamily family, auto& batch) {
+    if (detail::lambda_of(batch) == nullptr || batch.size() == 0) return;
+    constexpr std::size_t N = detail::arity_of<std::decay_t<decltype(batch)>>();
+    if constexpr (N != 0) {
+      auto& share = jacobi_.lambda_share[std::size_t(family)];
+      share.assign(padded_size(batch.size()), 0);
+      for (std::size_t j = 0; j < batch.size(); ++j) {
+        std::size_t movable_particles = 0, incidences_there = 0;
+        for (std::size_t k = 0; k < N; ++k) {
+          const ParticleIndex p = jacobi_.incidence_particle[batch.particles.particle[k][j]];
+          if (!movable(p)) continue;
+          ++movable_particles;
+          incidences_there += count[p + 1];
+        }
+        if (incidences_there != 0)
+          share[j] = Real(double(movable_particles) / double(incidences_there));
+      }
+    }
+  });
 }
 
 ConstraintLocation Schedule::locate(ConstraintIndex user_constraint) const {

@@ -111,6 +111,9 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
   incidence_inverse_mass_.assign(incidences, 0);
   for (std::size_t i = 0; i < incidences; ++i)
     incidence_inverse_mass_[i] = state_.inverse_mass[schedule_.jacobi().incidence_particle[i]];
+  schedule_.jacobi().constraints.for_each([&](ConstraintFamily family, auto& batch) {
+    jacobi_lambda_[std::size_t(family)] = detail::lambda_of(batch);
+  });
   statistics_.seconds_schedule = seconds_since(start);
 
   const std::size_t threads = settings_.mode == SolverMode::sequential ? 1
@@ -190,8 +193,30 @@ void Solver::jacobi_iteration(const ProjectionSettings& projection) {
   copy_incidences_in();
   const ParticleArrays incidences{incidence_x_.data(), incidence_y_.data(), incidence_z_.data(),
                                   incidence_inverse_mass_.data(), jacobi.incidence_count};
-  run_blocks(jacobi.blocks, incidences, jacobi.constraints, projection);
   const Real omega = settings_.jacobi_relaxation;
+  parallel_chunks(jacobi.blocks.size(), 1, [&](std::size_t first, std::size_t last) {
+    for (std::size_t b = first; b < last; ++b) {
+      const ScheduleBlock& block = jacobi.blocks[b];
+      const std::size_t f = std::size_t(block.family);
+      Real* lambda = jacobi_lambda_[f];
+      if (lambda == nullptr || projection.semantics != ConstraintSemantics::compliance) {
+        kProjectBlock[f](incidences, jacobi.constraints, block.begin, block.end, projection);
+        continue;
+      }
+      // Δλ scaled by the constraint's share (JacobiSet::lambda_share), in sub-blocks whose
+      // λ fit on the stack.
+      const Real* share = jacobi.lambda_share[f].data();
+      constexpr std::size_t kSub = 8 * kMaxLanes;
+      for (std::size_t i = block.begin; i < block.end; i += kSub) {
+        const std::size_t end = std::min<std::size_t>(block.end, i + kSub);
+        Real before[kSub];
+        std::copy(lambda + i, lambda + end, before);
+        kProjectBlock[f](incidences, jacobi.constraints, i, end, projection);
+        for (std::size_t c = i; c < end; ++c)
+          lambda[c] = before[c - i] + omega * share[c] * (lambda[c] - before[c - i]);
+      }
+    }
+  });
   parallel_chunks(jacobi.particles.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
     for (std::size_t k = first; k < last; ++k) {
       const ParticleIndex p = jacobi.particles[k];

@@ -16,7 +16,8 @@ enum class ClothBending { none, dihedral, isometric };
 
 inline Model cloth_model(std::size_t columns, std::size_t rows,
                          ClothBending bending = ClothBending::dihedral,
-                         Real bending_compliance = Real(1e-3)) {
+                         Real bending_compliance = Real(1e-3),
+                         Real distance_compliance = 0) {
   io::ClothGrid grid = io::make_cloth_grid(columns, rows, Real(1) / Real(columns - 1));
   for (Vector3r& p : grid.positions) p = Vector3r(p.x(), 0, p.y());
   std::vector<Real> inverse_masses(grid.vertex_count(), Real(1));
@@ -24,7 +25,8 @@ inline Model cloth_model(std::size_t columns, std::size_t rows,
   inverse_masses[rows * columns - 1] = 0;
   Model model;
   model.particles = ParticleState(grid.positions, inverse_masses);
-  model.constraints.distance = make_distance_constraints({grid.edge_indices, grid.positions});
+  model.constraints.distance = make_distance_constraints(
+      {grid.edge_indices, grid.positions, Real(1), distance_compliance});
   if (bending == ClothBending::dihedral)
     model.constraints.dihedral = make_dihedral_constraints(
         {grid.bending_indices, grid.positions, Real(1), bending_compliance});

@@ -91,6 +91,12 @@ struct JacobiSet {
   std::vector<ParticleIndex> particles;
   std::vector<std::uint32_t> particle_offsets;
   std::vector<std::uint32_t> particle_incidences;
+  /// Per family with XPBD multipliers, per constraint: 1 / (the mean number of Jacobi
+  /// constraints at its movable particles). A constraint's position corrections reach its
+  /// particles divided by their counts, so its λ may only grow by the same share, or the
+  /// compliance term α̃λ would see forces the positions never felt (the material would act
+  /// several times softer); the solver scales Δλ by ω times this.
+  std::array<AlignedVector<Real>, kConstraintFamilyCount> lambda_share;
   /// The whole set split into work blocks.
   std::vector<ScheduleBlock> blocks;
   std::size_t constraint_count = 0;

@@ -41,7 +41,7 @@
 namespace tessera {
 
 /// Jacobi over-relaxation ω when nothing else is said (see the README for the measurement).
-inline constexpr Real kDefaultJacobiRelaxation = Real(1);
+inline constexpr Real kDefaultJacobiRelaxation = Real(1.5);
 
 struct SolverSettings {
   SolverMode mode = SolverMode::gs;
@@ -157,6 +157,8 @@ class Solver {
   ParticleState state_;
   /// The Jacobi set's private particle copies.
   AlignedVector<Real> incidence_x_, incidence_y_, incidence_z_, incidence_inverse_mass_;
+  /// λ of each family of the Jacobi set (nullptr: none).
+  std::array<Real*, kConstraintFamilyCount> jacobi_lambda_{};
   std::unique_ptr<tbb::task_arena> arena_;
   StepReport report_;
   SolverStatistics statistics_;

@@ -1,0 +1,585 @@
+// constraint_residual for every family: what the solver reports as the per-family residual.
+// For each family: 0 at the rest configuration, a hand-computed answer for a simple
+// deformation, invariance under rigid motions, and a finite value (with its documented
+// reading) for degenerate configurations: all particles at one point, and points near a
+// point, a line or a plane.
+#include <tessera/core/constraint_residual.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "test_support.hpp"
+
+namespace tessera {
+namespace {
+
+using test::Random;
+
+/// Round-off of a residual that should be zero, or agree with a hand-computed value, after a
+/// few dozen flops on O(1) coordinates.
+constexpr Real kResidualTolerance = kDoublePrecision ? Real(1e-12) : Real(2e-5);
+
+std::vector<Real> unit_masses(std::size_t n) { return std::vector<Real>(n, Real(1)); }
+
+/// The residual of constraint c of `batch` with the particles at `positions`.
+template <class Batch>
+Real residual(const Batch& batch, const std::vector<Vector3r>& positions, std::size_t c = 0) {
+  ParticleState state(positions, unit_masses(positions.size()));
+  return constraint_residual(ParticleArrays::of(state), batch, c);
+}
+
+/// x ↦ A (x − origin) + origin for every point.
+std::vector<Vector3r> deformed(const std::vector<Vector3r>& x, const Matrix3r& A,
+                               const Vector3r& origin) {
+  std::vector<Vector3r> y;
+  for (const Vector3r& p : x) y.push_back(A * (p - origin) + origin);
+  return y;
+}
+
+std::vector<Vector3r> scaled(const std::vector<Vector3r>& x, Real s, const Vector3r& origin) {
+  return deformed(x, s * Matrix3r::Identity(), origin);
+}
+
+std::vector<Vector3r> rigidly_moved(const std::vector<Vector3r>& x, const Matrix3r& R,
+                                    const Vector3r& t) {
+  std::vector<Vector3r> y;
+  for (const Vector3r& p : x) y.push_back(R * p + t);
+  return y;
+}
+
+Vector3r centroid(const std::vector<Vector3r>& x) {
+  Vector3r sum = Vector3r::Zero();
+  for (const Vector3r& p : x) sum += p;
+  return sum / Real(x.size());
+}
+
+/// The rotation by `angle` about the unit `axis` through `point`, applied to p.
+Vector3r rotated_about(const Vector3r& p, const Vector3r& point, const Vector3r& axis,
+                       Real angle) {
+  return Eigen::AngleAxis<Real>(angle, axis) * (p - point) + point;
+}
+
+/// ‖½ (FᵀF − I)‖_F, computed with Eigen (the hand reference of the strain families).
+template <int Rows, int Cols>
+Real green_strain_norm(const Eigen::Matrix<Real, Rows, Cols>& F) {
+  const Eigen::Matrix<Real, Cols, Cols> strain =
+      Real(0.5) * (F.transpose() * F - Eigen::Matrix<Real, Cols, Cols>::Identity());
+  return strain.norm();
+}
+
+/// The residual is unchanged (to round-off) by five random rigid motions of the positions.
+template <class Batch>
+void expect_rigid_invariance(const Batch& batch, const std::vector<Vector3r>& positions,
+                             std::size_t c = 0) {
+  const Real reference = residual(batch, positions, c);
+  Random random(77);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Matrix3r R = random.rotation();
+    const Vector3r t = random.vector(-5, 5);
+    EXPECT_NEAR(residual(batch, rigidly_moved(positions, R, t), c), reference,
+                test::kRoundOff * std::max(Real(1), reference))
+        << "trial " << trial;
+  }
+}
+
+/// Finite and ≥ 0 on N points near one point, a line or a plane (test::near_degenerate_points,
+/// every scale down to the exact degenerate shape).
+template <std::size_t N, class Batch>
+void expect_finite_near_degenerate(const Batch& batch) {
+  Random random(5);
+  for (int pattern = 0; pattern < 3; ++pattern)
+    for (const Real scale : test::kNearDegenerateScales)
+      for (int trial = 0; trial < 20; ++trial) {
+        const auto points = test::near_degenerate_points<N>(random, pattern, scale);
+        const Real r = residual(batch, std::vector<Vector3r>(points.begin(), points.end()));
+        ASSERT_TRUE(std::isfinite(r)) << "pattern " << pattern << ", scale " << scale;
+        ASSERT_GE(r, 0) << "pattern " << pattern << ", scale " << scale;
+      }
+}
+
+/// n copies of one point.
+std::vector<Vector3r> collapsed(std::size_t n) {
+  return std::vector<Vector3r>(n, Vector3r(Real(0.3), Real(-0.2), Real(0.7)));
+}
+
+/// A well-shaped, slightly irregular tetrahedron away from the origin (positive orientation).
+std::vector<Vector3r> rest_tetrahedron() {
+  const Vector3r o(Real(0.4), Real(-0.3), Real(1.2));
+  return {o, o + Vector3r(Real(1.1), Real(0.1), Real(-0.05)),
+          o + Vector3r(Real(0.15), Real(0.9), Real(0.1)),
+          o + Vector3r(Real(-0.1), Real(0.2), Real(1.05))};
+}
+
+const std::vector<ParticleIndex> kFirstThree = {0, 1, 2};
+const std::vector<ParticleIndex> kFirstFour = {0, 1, 2, 3};
+
+/// A moderate general deformation: F = A for every element under x ↦ A x.
+Matrix3r general_deformation() {
+  Matrix3r A;
+  A << Real(1.1), Real(0.2), Real(-0.05),  //
+      Real(0.05), Real(0.9), Real(0.1),    //
+      Real(-0.1), Real(0.15), Real(1.2);
+  return A;
+}
+
+// ------------------------------------------------------------------------------- distance
+TEST(DistanceResidual, RelativeStretchOfTheRestLength) {
+  const Vector3r p0(Real(0.1), Real(0.2), Real(0.3));
+  const Vector3r direction = Vector3r(1, 2, 2) / 3;
+  const std::vector<Vector3r> rest = {p0, p0 + 2 * direction};
+  const std::vector<ParticleIndex> edge = {0, 1};
+  const DistanceConstraints batch = make_distance_constraints({edge, rest});
+  EXPECT_NEAR(residual(batch, rest), 0, kResidualTolerance);
+  EXPECT_NEAR(residual(batch, {p0, p0 + Real(2.2) * direction}), Real(0.1), kResidualTolerance);
+  EXPECT_NEAR(residual(batch, {p0, p0 + Real(1.5) * direction}), Real(0.25), kResidualTolerance);
+  expect_rigid_invariance(batch, {p0, p0 + Real(2.6) * direction});
+  EXPECT_EQ(residual(batch, collapsed(2)), Real(1));
+  expect_finite_near_degenerate<2>(batch);
+}
+
+TEST(DistanceResidual, EachConstraintReadsItsOwnParticles) {
+  // A chain 0 - 1 - 2 with rest lengths 1 and 2; only the second edge is stretched (by 30 %).
+  const std::vector<Vector3r> rest = {Vector3r(0, 0, 0), Vector3r(1, 0, 0), Vector3r(3, 0, 0)};
+  const std::vector<ParticleIndex> chain = {0, 1, 1, 2};
+  const DistanceConstraints batch = make_distance_constraints({chain, rest});
+  const std::vector<Vector3r> current = {rest[0], rest[1], Vector3r(Real(3.6), 0, 0)};
+  EXPECT_NEAR(residual(batch, current, 0), 0, kResidualTolerance);
+  EXPECT_NEAR(residual(batch, current, 1), Real(0.3), kResidualTolerance);
+}
+
+// --------------------------------------------------------------------------------- volume
+TEST(VolumeResidual, RelativeChangeOfTheSignedVolume) {
+  const std::vector<Vector3r> rest = rest_tetrahedron();
+  const VolumeConstraints batch = make_volume_constraints({kFirstFour, rest});
+  EXPECT_NEAR(residual(batch, rest), 0, kResidualTolerance);
+  const Real s = Real(1.2);
+  EXPECT_NEAR(residual(batch, scaled(rest, s, centroid(rest))), s * s * s - 1,
+              kResidualTolerance);
+  EXPECT_NEAR(residual(batch, scaled(rest, Real(0.5), rest[2])), Real(0.875),
+              kResidualTolerance);
+  // Mirrored: V = -V0, a change of 2 V0.
+  const Matrix3r mirror = Eigen::DiagonalMatrix<Real, 3>(1, 1, -1).toDenseMatrix();
+  EXPECT_NEAR(residual(batch, deformed(rest, mirror, centroid(rest))), 2, kResidualTolerance);
+  expect_rigid_invariance(batch, deformed(rest, general_deformation(), centroid(rest)));
+  EXPECT_EQ(residual(batch, collapsed(4)), Real(1));
+  expect_finite_near_degenerate<4>(batch);
+}
+
+// ------------------------------------------------------------------------------- dihedral
+/// Wings p0, p1 about the shared edge p2 = origin → p3 along y; p1 folded by `fold` radians.
+std::vector<Vector3r> dihedral_stencil(Real fold) {
+  const Vector3r p2(0, 0, 0), p3(0, 1, 0), axis(0, 1, 0);
+  const Vector3r p0(-1, Real(0.4), 0);
+  const Vector3r p1 = rotated_about(Vector3r(Real(0.9), Real(0.7), 0), p2, axis, fold);
+  return {p0, p1, p2, p3};
+}
+
+TEST(DihedralResidual, AngleChangeInRadians) {
+  for (const Real rest_fold : {Real(0), Real(0.5), Real(-1.2)}) {
+    SCOPED_TRACE(rest_fold);
+    const std::vector<Vector3r> rest = dihedral_stencil(rest_fold);
+    const DihedralConstraints batch = make_dihedral_constraints({kFirstFour, rest});
+    EXPECT_NEAR(residual(batch, rest), 0, kResidualTolerance);
+    // Folding further in the rest fold's direction (away from φ = 0 and φ = π).
+    const Real direction = rest_fold < 0 ? Real(-1) : Real(1);
+    EXPECT_NEAR(residual(batch, dihedral_stencil(rest_fold + direction * Real(0.3))), Real(0.3),
+                kResidualTolerance);
+    EXPECT_NEAR(residual(batch, dihedral_stencil(rest_fold + direction * Real(0.7))), Real(0.7),
+                kResidualTolerance);
+    expect_rigid_invariance(batch, dihedral_stencil(rest_fold + direction * Real(0.4)));
+    // Collapsed: no angle; the formula reads φ = 0, so the residual is φ0.
+    EXPECT_NEAR(residual(batch, collapsed(4)), batch.rest_angle[0], kResidualTolerance);
+    expect_finite_near_degenerate<4>(batch);
+  }
+}
+
+TEST(DihedralResidual, NeverExceedsPi) {
+  const DihedralConstraints batch = make_dihedral_constraints({kFirstFour, dihedral_stencil(0)});
+  Random random(3);
+  for (int trial = 0; trial < 200; ++trial) {
+    const std::vector<Vector3r> x = {random.vector(), random.vector(), random.vector(),
+                                     random.vector()};
+    const Real r = residual(batch, x);
+    EXPECT_GE(r, 0);
+    EXPECT_LE(r, std::numbers::pi_v<Real> + kResidualTolerance);
+  }
+}
+
+// ---------------------------------------------------------------------- isometric bending
+/// A flat, asymmetric stencil in the xy plane: wings p0, p1, shared edge p2-p3.
+std::vector<Vector3r> flat_bending_stencil() {
+  return {Vector3r(-1, Real(0.3), 0), Vector3r(Real(0.8), Real(0.6), 0), Vector3r(0, 0, 0),
+          Vector3r(Real(0.1), 1, 0)};
+}
+
+TEST(IsometricBendingResidual, MeanCurvatureVectorOfTheStencil) {
+  const std::vector<Vector3r> rest = flat_bending_stencil();
+  const IsometricBendingConstraints batch = make_isometric_bending_constraints({kFirstFour, rest});
+  EXPECT_NEAR(residual(batch, rest), 0, kResidualTolerance);
+  // From a flat stencil u = Σ k_j p_j is 0, so moving wing p0 by d gives |u| = |k_0| |d|,
+  // with k_0² = Q_00 (Q = k kᵀ), whatever the direction of d.
+  const Real k0 = std::sqrt(batch.matrix(0)(0, 0));
+  for (const Vector3r& d : {Vector3r(0, 0, Real(0.2)), Vector3r(Real(0.1), Real(-0.1), Real(0.05))}) {
+    std::vector<Vector3r> x = rest;
+    x[0] += d;
+    EXPECT_NEAR(residual(batch, x), k0 * d.norm(), kResidualTolerance);
+  }
+  // Also for a general fold, against C = ½ pᵀ Q p per coordinate: |u| = sqrt(pᵀ Q p).
+  std::vector<Vector3r> folded = rest;
+  folded[1] = rotated_about(rest[1], rest[2], (rest[3] - rest[2]).normalized(), Real(0.6));
+  folded[0].z() += Real(0.1);
+  Real quadratic = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      quadratic += batch.matrix(0)(i, j) * folded[std::size_t(i)].dot(folded[std::size_t(j)]);
+  EXPECT_NEAR(residual(batch, folded), std::sqrt(quadratic), test::kRoundOff);
+  expect_rigid_invariance(batch, folded);
+  EXPECT_NEAR(residual(batch, collapsed(4)), 0, kResidualTolerance);
+  expect_finite_near_degenerate<4>(batch);
+}
+
+TEST(IsometricBendingResidual, IsDimensionless) {
+  // Scaling rest and current shape together leaves |u| unchanged (k ~ 1/length).
+  const std::vector<Vector3r> rest = flat_bending_stencil();
+  std::vector<Vector3r> folded = rest;
+  folded[1] = rotated_about(rest[1], rest[2], (rest[3] - rest[2]).normalized(), Real(0.5));
+  const IsometricBendingConstraints batch = make_isometric_bending_constraints({kFirstFour, rest});
+  const Vector3r origin = Vector3r::Zero();
+  const IsometricBendingConstraints big =
+      make_isometric_bending_constraints({kFirstFour, scaled(rest, 3, origin)});
+  EXPECT_NEAR(residual(big, scaled(folded, 3, origin)), residual(batch, folded),
+              test::kRoundOff);
+}
+
+// ---------------------------------------------------------------------- proximity families
+/// One proximity constraint on particles 0 .. count−1 with rest distance d0.
+ProximityDistanceConstraintInput proximity_input(const std::vector<ParticleIndex>& particles,
+                                                 Real rest_distance) {
+  ProximityDistanceConstraintInput input;
+  input.particles = particles;
+  input.particle_count = particles.size();
+  input.rest_distance = rest_distance;
+  return input;
+}
+
+TEST(EdgePointDistanceResidual, RelativeChangeOfThePointSegmentDistance) {
+  // Particle order (p, p0, p1): the point above the segment p0-p1 at the rest distance 0.5.
+  const std::vector<Vector3r> rest = {Vector3r(Real(0.5), Real(0.5), 0), Vector3r(0, 0, 0),
+                                      Vector3r(2, 0, 0)};
+  const EdgePointDistanceConstraints batch =
+      make_edge_point_distance_constraints(proximity_input(kFirstThree, Real(0.5)));
+  EXPECT_NEAR(residual(batch, rest), 0, kResidualTolerance);
+  EXPECT_NEAR(residual(batch, {Vector3r(Real(0.5), Real(0.6), 0), rest[1], rest[2]}),
+              Real(0.2), kResidualTolerance);
+  // Beyond the end p1 the closest point is p1 itself: d = 1.
+  EXPECT_NEAR(residual(batch, {Vector3r(3, 0, 0), rest[1], rest[2]}), 1, kResidualTolerance);
+  expect_rigid_invariance(batch, {Vector3r(Real(1.5), Real(0.3), Real(0.2)), rest[1], rest[2]});
+  EXPECT_EQ(residual(batch, collapsed(3)), Real(1));  // d = 0
+  expect_finite_near_degenerate<3>(batch);
+
+  // With d0 = 0 the residual is the distance itself.
+  const EdgePointDistanceConstraints touching =
+      make_edge_point_distance_constraints(proximity_input(kFirstThree, 0));
+  EXPECT_NEAR(residual(touching, rest), Real(0.5), kResidualTolerance);
+  EXPECT_EQ(residual(touching, collapsed(3)), Real(0));
+}
+
+TEST(TrianglePointDistanceResidual, RelativeChangeOfThePointTriangleDistance) {
+  // Particle order (p, p0, p1, p2): the point 0.4 above the face.
+  const std::vector<Vector3r> rest = {Vector3r(Real(0.2), Real(0.2), Real(0.4)),
+                                      Vector3r(0, 0, 0), Vector3r(1, 0, 0), Vector3r(0, 1, 0)};
+  const TrianglePointDistanceConstraints batch =
+      make_triangle_point_distance_constraints(proximity_input(kFirstFour, Real(0.4)));
+  EXPECT_NEAR(residual(batch, rest), 0, kResidualTolerance);
+  std::vector<Vector3r> closer = rest;
+  closer[0].z() = Real(0.3);
+  EXPECT_NEAR(residual(batch, closer), Real(0.25), kResidualTolerance);
+  // Below the face by 0.2: d = 0.2 again (distance, not signed).
+  closer[0].z() = Real(-0.2);
+  EXPECT_NEAR(residual(batch, closer), Real(0.5), kResidualTolerance);
+  std::vector<Vector3r> off_face = rest;
+  off_face[0] = Vector3r(Real(1.5), Real(0.5), Real(0.1));
+  expect_rigid_invariance(batch, off_face);
+  EXPECT_EQ(residual(batch, collapsed(4)), Real(1));
+  expect_finite_near_degenerate<4>(batch);
+}
+
+TEST(EdgeEdgeDistanceResidual, RelativeChangeOfTheSegmentSegmentDistance) {
+  // Two crossing segments, one 0.5 above the other.
+  const auto crossing = [](Real height) {
+    return std::vector<Vector3r>{Vector3r(-1, 0, 0), Vector3r(1, 0, 0), Vector3r(0, -1, height),
+                                 Vector3r(Real(0.2), 1, height)};
+  };
+  const EdgeEdgeDistanceConstraints batch =
+      make_edge_edge_distance_constraints(proximity_input(kFirstFour, Real(0.5)));
+  EXPECT_NEAR(residual(batch, crossing(Real(0.5))), 0, kResidualTolerance);
+  EXPECT_NEAR(residual(batch, crossing(Real(0.45))), Real(0.1), kResidualTolerance);
+  EXPECT_NEAR(residual(batch, crossing(Real(0.8))), Real(0.6), kResidualTolerance);
+  expect_rigid_invariance(batch, crossing(Real(0.3)));
+  EXPECT_EQ(residual(batch, collapsed(4)), Real(1));
+  expect_finite_near_degenerate<4>(batch);
+}
+
+// ------------------------------------------------------------------------ strain families
+/// A triangle in the xy plane (the strain triangle's rest convention), off the origin.
+std::vector<Vector3r> rest_triangle_xy() {
+  const Vector3r o(Real(0.3), Real(-0.4), Real(0.25));
+  return {o, o + Vector3r(1, Real(0.1), 0), o + Vector3r(Real(0.2), Real(0.9), 0)};
+}
+
+/// A triangle in a tilted plane.
+std::vector<Vector3r> rest_triangle_tilted() {
+  const Vector3r o(Real(-0.2), Real(0.5), Real(0.9));
+  return {o, o + Vector3r(Real(0.8), Real(0.3), Real(0.4)),
+          o + Vector3r(Real(-0.1), Real(0.7), Real(0.6))};
+}
+
+/// F of a triangle deformed by x ↦ A x: A restricted to the rest triangle's plane, in the
+/// frame (p1 − p0 normalised, its in-plane normal), which F's Green strain does not depend on.
+Eigen::Matrix<Real, 3, 2> triangle_deformation(const std::vector<Vector3r>& rest,
+                                              const Matrix3r& A) {
+  const Vector3r a = (rest[1] - rest[0]).normalized();
+  const Vector3r normal = (rest[1] - rest[0]).cross(rest[2] - rest[0]).normalized();
+  Eigen::Matrix<Real, 3, 2> frame;
+  frame.col(0) = a;
+  frame.col(1) = normal.cross(a);
+  return A * frame;
+}
+
+/// The residual checks of a triangle family on rest triangle `rest` (every stretch in-plane).
+template <class Batch>
+void expect_triangle_green_strain(const Batch& batch, const std::vector<Vector3r>& rest) {
+  EXPECT_NEAR(residual(batch, rest), 0, kResidualTolerance);
+  for (const Real s : {Real(1.1), Real(0.8)})
+    EXPECT_NEAR(residual(batch, scaled(rest, s, centroid(rest))),
+                std::sqrt(Real(2)) * Real(0.5) * std::abs(s * s - 1), kResidualTolerance);
+  const Matrix3r A = general_deformation();
+  const std::vector<Vector3r> x = deformed(rest, A, rest[1]);
+  EXPECT_NEAR(residual(batch, x), green_strain_norm(triangle_deformation(rest, A)),
+              kResidualTolerance);
+  expect_rigid_invariance(batch, x);
+  EXPECT_NEAR(residual(batch, collapsed(3)), std::sqrt(Real(2)) / 2, kResidualTolerance);
+  expect_finite_near_degenerate<3>(batch);
+}
+
+/// The residual checks of a tetrahedron family on rest_tetrahedron().
+template <class Batch>
+void expect_tetra_green_strain(const Batch& batch) {
+  const std::vector<Vector3r> rest = rest_tetrahedron();
+  EXPECT_NEAR(residual(batch, rest), 0, kResidualTolerance);
+  for (const Real s : {Real(1.1), Real(0.8)})
+    EXPECT_NEAR(residual(batch, scaled(rest, s, centroid(rest))),
+                std::sqrt(Real(3)) * Real(0.5) * std::abs(s * s - 1), kResidualTolerance);
+  const Matrix3r A = general_deformation();
+  const std::vector<Vector3r> x = deformed(rest, A, rest[2]);
+  EXPECT_NEAR(residual(batch, x), green_strain_norm(Eigen::Matrix<Real, 3, 3>(A)),
+              kResidualTolerance);
+  // A shear x += γ y: ‖E‖ = ½ γ sqrt(2 + γ²).
+  Matrix3r shear = Matrix3r::Identity();
+  shear(0, 1) = Real(0.3);
+  EXPECT_NEAR(residual(batch, deformed(rest, shear, rest[0])),
+              Real(0.15) * std::sqrt(Real(2.09)), kResidualTolerance);
+  expect_rigid_invariance(batch, x);
+  // Green strain does not see inversion: a mirrored tetrahedron reads 0.
+  const Matrix3r mirror = Eigen::DiagonalMatrix<Real, 3>(-1, 1, 1).toDenseMatrix();
+  EXPECT_NEAR(residual(batch, deformed(rest, mirror, rest[3])), 0, kResidualTolerance);
+  EXPECT_NEAR(residual(batch, collapsed(4)), std::sqrt(Real(3)) / 2, kResidualTolerance);
+  expect_finite_near_degenerate<4>(batch);
+}
+
+TEST(StrainTriangleResidual, GreenStrainNormInThePlane) {
+  const std::vector<Vector3r> rest = rest_triangle_xy();
+  expect_triangle_green_strain(make_strain_triangle_constraints({kFirstThree, rest}), rest);
+}
+
+TEST(StrainTriangleResidual, RestTriangleIsTakenInTheXyPlane) {
+  // The family's convention (init_StrainTriangleConstraint ignores z): a tilted rest triangle
+  // is stretched at its own rest positions, a rigid motion of its xy projection is not.
+  const std::vector<Vector3r> rest = rest_triangle_tilted();
+  const StrainTriangleConstraints batch = make_strain_triangle_constraints({kFirstThree, rest});
+  EXPECT_GT(residual(batch, rest), Real(0.1));
+  std::vector<Vector3r> projected = rest;
+  for (Vector3r& p : projected) p.z() = 0;
+  EXPECT_NEAR(residual(batch, projected), 0, kResidualTolerance);
+}
+
+TEST(StrainTetraResidual, GreenStrainNorm) {
+  expect_tetra_green_strain(make_strain_tetra_constraints({kFirstFour, rest_tetrahedron()}));
+}
+
+TEST(FEMTriangleResidual, GreenStrainNormInTheTrianglesOwnPlane) {
+  for (const auto& rest : {rest_triangle_xy(), rest_triangle_tilted()})
+    expect_triangle_green_strain(make_fem_triangle_constraints({kFirstThree, rest}), rest);
+}
+
+TEST(FEMTetraResidual, GreenStrainNormWhateverTheMaterial) {
+  const std::vector<Vector3r> rest = rest_tetrahedron();
+  FEMTetraConstraintInput input{kFirstFour, rest};
+  expect_tetra_green_strain(make_fem_tetra_constraints(input));
+  input.youngs_modulus = 1000;
+  input.poisson_ratio = Real(0.1);
+  input.handle_inversion = false;
+  expect_tetra_green_strain(make_fem_tetra_constraints(input));
+}
+
+// ---------------------------------------------------------------------------- shape matching
+/// Two clusters: a jittered cube (particles 0..7) and a flat square of four (8..11).
+struct ClusterScene {
+  std::vector<Vector3r> rest;
+  std::vector<Real> inverse_masses;
+  std::vector<std::uint32_t> offsets = {0, 8, 12};
+  std::vector<ParticleIndex> particles;
+};
+
+ClusterScene cluster_scene() {
+  ClusterScene scene;
+  Random random(11);
+  for (int i = 0; i < 8; ++i)
+    scene.rest.push_back(Vector3r(Real(i & 1), Real((i >> 1) & 1), Real((i >> 2) & 1)) +
+                         Real(0.1) * random.vector() + Vector3r(2, -1, Real(0.5)));
+  for (int i = 0; i < 4; ++i)
+    scene.rest.push_back(Vector3r(Real(i & 1), Real((i >> 1) & 1), 0) * 2 +
+                         Vector3r(-3, 0, 1));
+  for (std::size_t i = 0; i < scene.rest.size(); ++i) {
+    scene.particles.push_back(ParticleIndex(i));
+    scene.inverse_masses.push_back(i == 3 ? Real(0) : random.uniform(Real(0.5), 2));
+  }
+  return scene;
+}
+
+ShapeMatchingConstraints build(const ClusterScene& scene, bool allow_stretch) {
+  ShapeMatchingInput input{scene.offsets, scene.particles, scene.rest, scene.inverse_masses};
+  input.allow_stretch = allow_stretch;
+  return make_shape_matching_constraints(input);
+}
+
+/// The positions with cluster `first .. last` moved by x ↦ A (x − o) + o.
+std::vector<Vector3r> with_cluster_deformed(std::vector<Vector3r> x, std::size_t first,
+                                            std::size_t last, const Matrix3r& A,
+                                            const Vector3r& o) {
+  for (std::size_t i = first; i < last; ++i) x[i] = A * (x[i] - o) + o;
+  return x;
+}
+
+TEST(ShapeMatchingResidual, GoalDistanceRelativeToTheClusterSize) {
+  const ClusterScene scene = cluster_scene();
+  const ShapeMatchingConstraints rigid = build(scene, false);
+  for (std::size_t c = 0; c < 2; ++c) {
+    SCOPED_TRACE(c);
+    const std::size_t first = scene.offsets[c], last = scene.offsets[c + 1];
+    EXPECT_NEAR(residual(rigid, scene.rest, c), 0, kResidualTolerance);
+    // A rigid motion of the cluster alone leaves it satisfied.
+    Random random(unsigned(c) + 1);
+    const Matrix3r R = random.rotation();
+    const Vector3r o = random.vector();
+    EXPECT_NEAR(residual(rigid, with_cluster_deformed(scene.rest, first, last, R, o), c), 0,
+                kResidualTolerance);
+    // A uniform scaling by s (also rotated): the best rotation is R, every particle is
+    // |s − 1| |q_i| from its goal, so the residual is |s − 1|.
+    for (const Real s : {Real(1.2), Real(0.7)})
+      EXPECT_NEAR(residual(rigid, with_cluster_deformed(scene.rest, first, last, s * R, o), c),
+                  std::abs(s - 1), kResidualTolerance);
+    // A cluster collapsed to one point is |q_i| from every goal: 1.
+    std::vector<Vector3r> x = scene.rest;
+    for (std::size_t i = first; i < last; ++i) x[i] = Vector3r(Real(0.3), Real(-0.2), Real(0.7));
+    EXPECT_NEAR(residual(rigid, x, c), 1, kResidualTolerance);
+  }
+  // The other cluster is unaffected by a deformation of the first.
+  const std::vector<Vector3r> first_scaled =
+      with_cluster_deformed(scene.rest, 0, 8, Real(1.5) * Matrix3r::Identity(), scene.rest[0]);
+  EXPECT_NEAR(residual(rigid, first_scaled, 0), Real(0.5), kResidualTolerance);
+  EXPECT_NEAR(residual(rigid, first_scaled, 1), 0, kResidualTolerance);
+}
+
+TEST(ShapeMatchingResidual, WithStretchTheGoalIsTheBestLinearMap) {
+  // A linear fit needs a cluster that is not flat: only the cube.
+  ClusterScene cube = cluster_scene();
+  cube.offsets = {0, 8};
+  cube.particles.resize(8);
+  const ShapeMatchingConstraints stretchy = build(cube, true);
+  EXPECT_NEAR(residual(stretchy, cube.rest), 0, kResidualTolerance);
+  // Any affine map is matched exactly.
+  EXPECT_NEAR(residual(stretchy, deformed(cube.rest, general_deformation(), cube.rest[5])), 0,
+              kResidualTolerance);
+  // So is a collapse to one point (by the zero map): the goal is where the particles are.
+  EXPECT_NEAR(residual(stretchy, collapsed(8)), 0, kResidualTolerance);
+  // A change that no linear map makes is not: one corner of the cube moved.
+  std::vector<Vector3r> x = cube.rest;
+  x[0] += Vector3r(Real(0.2), Real(-0.1), Real(0.3));
+  EXPECT_GT(residual(stretchy, x), Real(0.05));
+}
+
+TEST(ShapeMatchingResidual, RigidInvariantAndFinite) {
+  const ClusterScene scene = cluster_scene();
+  for (const bool allow_stretch : {false, true}) {
+    ClusterScene cube = scene;
+    cube.offsets = {0, 8};
+    cube.particles.resize(8);
+    const ShapeMatchingConstraints batch = build(cube, allow_stretch);
+    Random random(9);
+    std::vector<Vector3r> x = cube.rest;
+    for (Vector3r& p : x) p += Real(0.2) * random.vector();  // not a linear map of the rest
+    const Real r = residual(batch, x);
+    EXPECT_GT(r, Real(0.05));
+    expect_rigid_invariance(batch, x);
+    expect_finite_near_degenerate<8>(batch);
+  }
+}
+
+// ------------------------------------------------------------------- particle–tet contact
+/// A unit tet (slots 1..4), the contact point on its bottom face z = 0 with the normal −z
+/// (out of the tet), and the particle (slot 0) at height z over the contact point.
+struct ContactScene {
+  std::vector<Vector3r> positions;
+  std::vector<Vector3r> barycentric = {Vector3r(Real(0.2), Real(0.2), 0)};
+  std::vector<Vector3r> normals = {Vector3r(0, 0, -1)};
+};
+
+ContactScene contact_scene(Real z) {
+  ContactScene scene;
+  const Vector3r contact_point(Real(0.2), Real(0.2), 0);
+  scene.positions = {contact_point + Vector3r(0, 0, z), Vector3r(0, 0, 0), Vector3r(1, 0, 0),
+                     Vector3r(0, 1, 0), Vector3r(0, 0, 1)};
+  return scene;
+}
+
+ParticleTetContacts build(const ContactScene& scene) {
+  const std::vector<ParticleIndex> contact = {0, 1, 2, 3, 4};
+  const ParticleState state(scene.positions, unit_masses(scene.positions.size()));
+  return make_particle_tet_contacts({contact, scene.barycentric, scene.normals}, state);
+}
+
+TEST(ParticleTetContactResidual, PenetrationDepthInLengthUnits) {
+  const ParticleTetContacts contacts = build(contact_scene(0));
+  EXPECT_EQ(residual(contacts, contact_scene(0).positions), 0);
+  // Outside (below the face, along the normal): satisfied.
+  EXPECT_EQ(residual(contacts, contact_scene(Real(-0.1)).positions), 0);
+  // Inside the tet by 0.15.
+  EXPECT_NEAR(residual(contacts, contact_scene(Real(0.15)).positions), Real(0.15),
+              kResidualTolerance);
+  // Moving the tet away from the particle (the face up by 0.25) also penetrates.
+  std::vector<Vector3r> x = contact_scene(0).positions;
+  for (std::size_t i = 1; i < 5; ++i) x[i].z() -= Real(0.25);
+  EXPECT_NEAR(residual(contacts, x), Real(0.25), kResidualTolerance);
+  EXPECT_NEAR(residual(contacts, collapsed(5)), 0, kResidualTolerance);
+  expect_finite_near_degenerate<5>(contacts);
+}
+
+TEST(ParticleTetContactResidual, RigidInvariantWithTheNormal) {
+  // The normal is contact data: a rigid motion of the scene moves it too.
+  const ContactScene scene = contact_scene(Real(0.3));
+  const Real reference = residual(build(scene), scene.positions);
+  EXPECT_NEAR(reference, Real(0.3), kResidualTolerance);
+  Random random(4);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Matrix3r R = random.rotation();
+    ContactScene moved = scene;
+    moved.positions = rigidly_moved(scene.positions, R, random.vector(-5, 5));
+    moved.normals[0] = R * scene.normals[0];
+    EXPECT_NEAR(residual(build(moved), moved.positions), reference, test::kRoundOff);
+  }
+}
+
+}  // namespace
+}  // namespace tessera

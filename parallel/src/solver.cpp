@@ -190,10 +190,14 @@ void Solver::copy_incidences_in() {
 void Solver::jacobi_iteration(const ProjectionSettings& projection) {
   JacobiSet& jacobi = schedule_.jacobi();
   if (jacobi.constraint_count == 0) return;
-  copy_incidences_in();
+  // In mode jacobi the reduction below writes each particle's new position back to its
+  // incidences, so the next iteration can skip the copy-in; anything else that moves
+  // particles (integration, the gs phases of hybrid, set_position) clears the flag.
+  if (!incidences_current_) copy_incidences_in();
   const ParticleArrays incidences{incidence_x_.data(), incidence_y_.data(), incidence_z_.data(),
                                   incidence_inverse_mass_.data(), jacobi.incidence_count};
   const Real omega = settings_.jacobi_relaxation;
+  const bool write_back = settings_.mode == SolverMode::jacobi;
   parallel_chunks(jacobi.blocks.size(), 1, [&](std::size_t first, std::size_t last) {
     for (std::size_t b = first; b < last; ++b) {
       const ScheduleBlock& block = jacobi.blocks[b];
@@ -230,11 +234,20 @@ void Solver::jacobi_iteration(const ProjectionSettings& projection) {
         dz += incidence_z_[i] - z;
       }
       const Real scale = omega / Real(end - begin);
-      state_.x[p] = x + scale * dx;
-      state_.y[p] = y + scale * dy;
-      state_.z[p] = z + scale * dz;
+      const Real new_x = x + scale * dx, new_y = y + scale * dy, new_z = z + scale * dz;
+      state_.x[p] = new_x;
+      state_.y[p] = new_y;
+      state_.z[p] = new_z;
+      if (!write_back) continue;
+      for (std::uint32_t j = begin; j < end; ++j) {
+        const std::uint32_t i = jacobi.particle_incidences[j];
+        incidence_x_[i] = new_x;
+        incidence_y_[i] = new_y;
+        incidence_z_[i] = new_z;
+      }
     }
   });
+  incidences_current_ = write_back;
 }
 
 void Solver::iterate(const ProjectionSettings& projection) {
@@ -271,6 +284,7 @@ void Solver::reset_lambdas() {
 }
 
 void Solver::integrate(Real h) {
+  incidences_current_ = false;
   const Real gx = settings_.gravity.x() * h, gy = settings_.gravity.y() * h,
              gz = settings_.gravity.z() * h;
   parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
@@ -336,7 +350,7 @@ void Solver::step() {
 Residual Solver::residual() {
   const auto ranges = detail::residual_ranges(schedule_, kResidualChunk);
   std::vector<detail::ResidualPartial> partials(ranges.size());
-  if (schedule_.jacobi().constraint_count != 0) copy_incidences_in();
+  if (schedule_.jacobi().constraint_count != 0 && !incidences_current_) copy_incidences_in();
   const ParticleArrays particles = ParticleArrays::of(state_);
   const ParticleArrays incidences{incidence_x_.data(), incidence_y_.data(), incidence_z_.data(),
                                   incidence_inverse_mass_.data(),
@@ -392,6 +406,7 @@ void Solver::set_position(ParticleIndex particle, const Vector3r& position) {
   if (!position.allFinite())
     throw InvalidInput("particle " + std::to_string(particle) + ": position is not finite");
   state_.set_position(schedule_.scheduled_particle(particle), position);
+  incidences_current_ = false;
 }
 
 void Solver::set_velocity(ParticleIndex particle, const Vector3r& velocity) {

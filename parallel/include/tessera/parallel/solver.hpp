@@ -157,6 +157,8 @@ class Solver {
   ParticleState state_;
   /// The Jacobi set's private particle copies.
   AlignedVector<Real> incidence_x_, incidence_y_, incidence_z_, incidence_inverse_mass_;
+  /// The incidences hold the current positions (mode jacobi, between iterations).
+  bool incidences_current_ = false;
   /// λ of each family of the Jacobi set (nullptr: none).
   std::array<Real*, kConstraintFamilyCount> jacobi_lambda_{};
   std::unique_ptr<tbb::task_arena> arena_;

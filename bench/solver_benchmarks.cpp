@@ -88,6 +88,28 @@ void run_solver(benchmark::State& state, SolverMode mode, const std::string& sce
 
 constexpr const char* kDefaultStrategy = "greedy";
 
+/// The cost of one colour phase: a 16×16 distance-only cloth (6 colours of ~120 constraints)
+/// cut into blocks of kMaxLanes constraints, so each phase is a parallel_for over ~8 tiny
+/// blocks. Counter time_per_phase = wall time per sweep / phases (the kernels' own work, ~700
+/// distance projections per sweep, is included and is well under a microsecond per phase).
+void BM_PhaseOverhead(benchmark::State& state) {
+  const Model model = test::cloth_model(16, 16, test::ClothBending::none);
+  SolverSettings settings;
+  settings.threads = std::size_t(state.range(0));
+  settings.block_size = kMaxLanes;
+  settings.report_residuals = false;
+  Solver solver(model, test::colour_model(model, "stencil"), settings);
+  solver.step();
+  for (auto _ : state) solver.project(1, settings.time_step);
+  state.SetItemsProcessed(state.iterations() * std::int64_t(model.constraints.size()));
+  const double phases = double(solver.statistics().coloured_phases);
+  state.counters["colours"] = phases;
+  state.counters["time_per_phase"] = benchmark::Counter(
+      double(state.iterations()) * phases,
+      benchmark::Counter::kIsRate | benchmark::Counter::kInvert, benchmark::Counter::kIs1000);
+}
+BENCHMARK(BM_PhaseOverhead)->Name("solver/phase_overhead")->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime();
+
 void register_benchmarks() {
   const char* scenes[] = {"cloth256", "cloth256_distance", "cloth1024", "tetbar200k"};
   for (const SolverMode mode :

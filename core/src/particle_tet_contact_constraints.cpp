@@ -56,6 +56,12 @@ HWY_INLINE void scatter_contact(ParticleArrays& arrays, const ParticleTetContact
                                 std::size_t i, const ContactLanes& lanes,
                                 const ContactCorrection<RealLanes>& correction,
                                 const LaneMask& active) {
+  if (arrays.corrected_x != nullptr) {  // redirected output (see ParticleArrays)
+    store_corrected(arrays, 0, i, lanes.particle, correction.particle, active);
+    for (std::size_t k = 0; k < 4; ++k)
+      store_corrected(arrays, k + 1, i, lanes.tet[k], correction.tet[k], active);
+    return;
+  }
   scatter_corrected(arrays, contacts.particles.particle[0].data() + i, lanes.particle,
                     correction.particle, active);
   for (int k = 0; k < 4; ++k)

@@ -156,7 +156,19 @@ void ProjectShapeMatchingConstraints(ParticleArrays particles,
                                  hn::Load(d, row + 7 * lanes)};
       const Vec3<RealLanes> correction = keep_if(
           write, shape_matching_correction(transform.T, q, centre, p.position, stiffness));
-      scatter_corrected(particles, scratch_index.data() + k * lanes, p, correction, write);
+      if (particles.corrected_x == nullptr) {
+        scatter_corrected(particles, scratch_index.data() + k * lanes, p, correction, write);
+      } else {  // redirected output: entry k of each lane's cluster
+        HWY_ALIGN ParticleIndex entry[kMaxLanes];
+        for (std::size_t lane = 0; lane < active_count; ++lane)
+          entry[lane] = constraints.offsets[i + lane] + ParticleIndex(k);
+        for (std::size_t lane = active_count; lane < lanes; ++lane) entry[lane] = 0;
+        // Every entry of the cluster, valid or not (an invalid cluster's correction is
+        // zero): the solver sums all of them.
+        const LaneMask in_cluster = hn::RebindMask(d, hn::Lt(widen(k32), wide_size));
+        ParticleArrays output = corrected_output(particles);
+        scatter_corrected(output, entry, p, correction, in_cluster);
+      }
     }
   }
 }

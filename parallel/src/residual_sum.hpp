@@ -29,8 +29,7 @@ struct ResidualPartial {
 /// Every real constraint of the schedule, in ranges of at most `chunk` constraints.
 std::vector<ResidualRange> residual_ranges(const Schedule& schedule, std::size_t chunk);
 
-/// The partial sums of one range, at `particles` (the Jacobi set's ranges are evaluated at
-/// its incidence copies, which must hold the current positions).
+/// The partial sums of one range, at `particles`.
 ResidualPartial residual_of_range(const ResidualRange& range, const ConstraintSets& sets,
                                   const ParticleArrays& particles);
 

@@ -277,14 +277,16 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
   jacobi_.constraints.for_each([&](ConstraintFamily family, auto& batch) {
     const auto& source = jacobi_source[std::size_t(family)];
     const IncidenceLayout& l = layout[std::size_t(family)];
-    const auto to_incidence = [&](std::size_t k, std::size_t j, ParticleIndex p) {
+    jacobi_.incidence_base[std::size_t(family)] = l.base;
+    jacobi_.incidence_stride[std::size_t(family)] = l.stride;
+    const auto renumber_and_record = [&](std::size_t k, std::size_t j, ParticleIndex p) {
       const std::size_t incidence = l.base + k * l.stride + j;
       jacobi_.incidence_particle[incidence] = scheduled_particle(p);
       real_incidence[incidence] = 1;
-      return ParticleIndex(incidence);
+      return scheduled_particle(p);
     };
-    batch = reorder(detail::same_family(model.constraints, batch), source,
-                    jacobi_.incidence_count, to_incidence);
+    batch = reorder(detail::same_family(model.constraints, batch), source, particle_count,
+                    renumber_and_record);
     split_into_blocks(family, 0, source.size(), options_.block_size, jacobi_.blocks);
     jacobi_.constraint_count += source.size();
   });
@@ -321,7 +323,7 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
       for (std::size_t j = 0; j < batch.size(); ++j) {
         std::size_t movable_particles = 0, incidences_there = 0;
         for (std::size_t k = 0; k < N; ++k) {
-          const ParticleIndex p = jacobi_.incidence_particle[batch.particles.particle[k][j]];
+          const ParticleIndex p = batch.particles.particle[k][j];
           if (!movable(p)) continue;
           ++movable_particles;
           incidences_there += count[p + 1];

@@ -108,9 +108,6 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
   incidence_x_.assign(incidences, 0);
   incidence_y_.assign(incidences, 0);
   incidence_z_.assign(incidences, 0);
-  incidence_inverse_mass_.assign(incidences, 0);
-  for (std::size_t i = 0; i < incidences; ++i)
-    incidence_inverse_mass_[i] = state_.inverse_mass[schedule_.jacobi().incidence_particle[i]];
   schedule_.jacobi().constraints.for_each([&](ConstraintFamily family, auto& batch) {
     jacobi_lambda_[std::size_t(family)] = detail::lambda_of(batch);
   });
@@ -175,36 +172,23 @@ void Solver::run_blocks(std::span<const ScheduleBlock> blocks, ParticleArrays pa
   });
 }
 
-void Solver::copy_incidences_in() {
-  const JacobiSet& jacobi = schedule_.jacobi();
-  const ParticleIndex* particle = jacobi.incidence_particle.data();
-  parallel_chunks(jacobi.incidence_count, kParticleChunk, [&](std::size_t first, std::size_t last) {
-    for (std::size_t i = first; i < last; ++i) {
-      incidence_x_[i] = state_.x[particle[i]];
-      incidence_y_[i] = state_.y[particle[i]];
-      incidence_z_[i] = state_.z[particle[i]];
-    }
-  });
-}
-
 void Solver::jacobi_iteration(const ProjectionSettings& projection) {
   JacobiSet& jacobi = schedule_.jacobi();
   if (jacobi.constraint_count == 0) return;
-  // In mode jacobi the reduction below writes each particle's new position back to its
-  // incidences, so the next iteration can skip the copy-in; anything else that moves
-  // particles (integration, the gs phases of hybrid, set_position) clears the flag.
-  if (!incidences_current_) copy_incidences_in();
-  const ParticleArrays incidences{incidence_x_.data(), incidence_y_.data(), incidence_z_.data(),
-                                  incidence_inverse_mass_.data(), jacobi.incidence_count};
   const Real omega = settings_.jacobi_relaxation;
-  const bool write_back = settings_.mode == SolverMode::jacobi;
   parallel_chunks(jacobi.blocks.size(), 1, [&](std::size_t first, std::size_t last) {
     for (std::size_t b = first; b < last; ++b) {
       const ScheduleBlock& block = jacobi.blocks[b];
       const std::size_t f = std::size_t(block.family);
+      // Gather from the particles, store into this family's incidences.
+      ParticleArrays particles = ParticleArrays::of(state_);
+      particles.corrected_x = incidence_x_.data() + jacobi.incidence_base[f];
+      particles.corrected_y = incidence_y_.data() + jacobi.incidence_base[f];
+      particles.corrected_z = incidence_z_.data() + jacobi.incidence_base[f];
+      particles.corrected_stride = jacobi.incidence_stride[f];
       Real* lambda = jacobi_lambda_[f];
       if (lambda == nullptr || projection.semantics != ConstraintSemantics::compliance) {
-        kProjectBlock[f](incidences, jacobi.constraints, block.begin, block.end, projection);
+        kProjectBlock[f](particles, jacobi.constraints, block.begin, block.end, projection);
         continue;
       }
       // Δλ scaled by the constraint's share (JacobiSet::lambda_share), in sub-blocks whose
@@ -215,7 +199,7 @@ void Solver::jacobi_iteration(const ProjectionSettings& projection) {
         const std::size_t end = std::min<std::size_t>(block.end, i + kSub);
         Real before[kSub];
         std::copy(lambda + i, lambda + end, before);
-        kProjectBlock[f](incidences, jacobi.constraints, i, end, projection);
+        kProjectBlock[f](particles, jacobi.constraints, i, end, projection);
         for (std::size_t c = i; c < end; ++c)
           lambda[c] = before[c - i] + omega * share[c] * (lambda[c] - before[c - i]);
       }
@@ -234,20 +218,11 @@ void Solver::jacobi_iteration(const ProjectionSettings& projection) {
         dz += incidence_z_[i] - z;
       }
       const Real scale = omega / Real(end - begin);
-      const Real new_x = x + scale * dx, new_y = y + scale * dy, new_z = z + scale * dz;
-      state_.x[p] = new_x;
-      state_.y[p] = new_y;
-      state_.z[p] = new_z;
-      if (!write_back) continue;
-      for (std::uint32_t j = begin; j < end; ++j) {
-        const std::uint32_t i = jacobi.particle_incidences[j];
-        incidence_x_[i] = new_x;
-        incidence_y_[i] = new_y;
-        incidence_z_[i] = new_z;
-      }
+      state_.x[p] = x + scale * dx;
+      state_.y[p] = y + scale * dy;
+      state_.z[p] = z + scale * dz;
     }
   });
-  incidences_current_ = write_back;
 }
 
 void Solver::iterate(const ProjectionSettings& projection) {
@@ -284,7 +259,6 @@ void Solver::reset_lambdas() {
 }
 
 void Solver::integrate(Real h) {
-  incidences_current_ = false;
   const Real gx = settings_.gravity.x() * h, gy = settings_.gravity.y() * h,
              gz = settings_.gravity.z() * h;
   parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
@@ -350,16 +324,12 @@ void Solver::step() {
 Residual Solver::residual() {
   const auto ranges = detail::residual_ranges(schedule_, kResidualChunk);
   std::vector<detail::ResidualPartial> partials(ranges.size());
-  if (schedule_.jacobi().constraint_count != 0 && !incidences_current_) copy_incidences_in();
   const ParticleArrays particles = ParticleArrays::of(state_);
-  const ParticleArrays incidences{incidence_x_.data(), incidence_y_.data(), incidence_z_.data(),
-                                  incidence_inverse_mass_.data(),
-                                  schedule_.jacobi().incidence_count};
   parallel_chunks(ranges.size(), 1, [&](std::size_t first, std::size_t last) {
     for (std::size_t k = first; k < last; ++k) {
       const auto& range = ranges[k];
       partials[k] = range.jacobi
-                        ? detail::residual_of_range(range, schedule_.jacobi().constraints, incidences)
+                        ? detail::residual_of_range(range, schedule_.jacobi().constraints, particles)
                         : detail::residual_of_range(range, schedule_.coloured(), particles);
     }
   });
@@ -406,7 +376,6 @@ void Solver::set_position(ParticleIndex particle, const Vector3r& position) {
   if (!position.allFinite())
     throw InvalidInput("particle " + std::to_string(particle) + ": position is not finite");
   state_.set_position(schedule_.scheduled_particle(particle), position);
-  incidences_current_ = false;
 }
 
 void Solver::set_velocity(ParticleIndex particle, const Vector3r& velocity) {

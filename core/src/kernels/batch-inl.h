@@ -131,13 +131,39 @@ HWY_INLINE void gather_constraint_particles(const ParticleArrays& particles,
   }
 }
 
-/// Scatters the corrected movable particles of the active lanes of constraints i .. i+W.
+/// The redirected output of ParticleArrays (corrected_x/y/z) seen as particle arrays, so the
+/// same scatter can write it.
+HWY_INLINE ParticleArrays corrected_output(const ParticleArrays& particles) {
+  return {particles.corrected_x, particles.corrected_y, particles.corrected_z,
+          particles.inverse_mass, particles.count};
+}
+
+/// Slot `slot` of constraints i .. i+W into the redirected output: consecutive elements, so a
+/// masked vector store per coordinate (active lanes whose particle is movable).
+HWY_INLINE void store_corrected(const ParticleArrays& particles, std::size_t slot, std::size_t i,
+                                const ParticleLanes& lanes, const Vec3<RealLanes>& correction,
+                                const LaneMask& active) {
+  const RealTag d;
+  const LaneMask write = hn::And(active, lanes.inverse_mass > hn::Zero(d));
+  const std::size_t at = slot * particles.corrected_stride + i;
+  hn::BlendedStore(lanes.position.x + correction.x, write, d, particles.corrected_x + at);
+  hn::BlendedStore(lanes.position.y + correction.y, write, d, particles.corrected_y + at);
+  hn::BlendedStore(lanes.position.z + correction.z, write, d, particles.corrected_z + at);
+}
+
+/// Scatters the corrected movable particles of the active lanes of constraints i .. i+W (or
+/// stores them in the redirected output, see ParticleArrays).
 template <int N>
 HWY_INLINE void scatter_constraint_particles(ParticleArrays& particles,
                                              const ParticleIndex* const* slot, std::size_t i,
                                              const ParticleLanes (&gathered)[N],
                                              const Vec3<RealLanes> (&corr)[N],
                                              const LaneMask& active) {
+  if (particles.corrected_x != nullptr) {
+    for (int k = 0; k < N; ++k)
+      store_corrected(particles, std::size_t(k), i, gathered[k], corr[k], active);
+    return;
+  }
   for (int k = 0; k < N; ++k)
     scatter_corrected(particles, slot[k] + i, gathered[k], corr[k], active);
 }

@@ -59,6 +59,16 @@ struct ParticleArrays {
   Real* z;
   const Real* inverse_mass;
   std::size_t count;
+  /// Redirected output (the solver's Jacobi sweeps): when corrected_x is set, a position
+  /// kernel leaves x, y, z untouched and stores the corrected position of slot k of
+  /// constraint c at corrected_x[k * corrected_stride + c] (y, z alike; a shape-matching
+  /// cluster's entry e at corrected_x[e]), for its movable particles only. The arrays must
+  /// hold every slot of the constraints projected; constraints projected together may then
+  /// share particles, since each writes only its own slots.
+  Real* corrected_x = nullptr;
+  Real* corrected_y = nullptr;
+  Real* corrected_z = nullptr;
+  std::size_t corrected_stride = 0;
 
   static ParticleArrays of(ParticleState& state) {
     return {state.x.data(), state.y.data(), state.z.data(), state.inverse_mass.data(),

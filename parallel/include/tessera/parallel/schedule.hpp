@@ -7,10 +7,12 @@
 //   a colour's phase = its blocks of every family: [family, begin, end) ranges of at most
 //   block_size constraints, run by parallel_for; the phases run one after another.
 //
-//   Jacobi set (mode jacobi, and the small tail colours of mode hybrid): the constraints get
-//   private copies of their particles ("incidences"), so they can all be projected at once:
-//     copy in:   incidence[i] = particle[incidence_particle[i]]
-//     project:   each constraint corrects its own incidences (the same batched kernels)
+//   Jacobi set (mode jacobi, and the small tail colours of mode hybrid): every slot of every
+//   constraint has an "incidence", a private place for its result, so all the constraints
+//   can be projected at once from the same positions:
+//     project:   the batched kernels gather the particles as usual but store each corrected
+//                position in its slot's incidence (ParticleArrays::corrected_*: whole-vector
+//                stores, slot k of constraint j at base + k·stride + j) instead of scattering
 //     reduce:    particle p += ω · Σ (incidence − p) / count, over p's incidences in a fixed
 //                order (CSR), so the sum is the same for any thread count (no atomics).
 //
@@ -81,8 +83,11 @@ struct ConstraintLocation {
 
 /// The constraints projected together from private particle copies (see the diagram above).
 struct JacobiSet {
-  /// Particle indices here are incidence ids, not particle ids.
+  /// The constraints, with renumbered particles like the coloured batches.
   ConstraintSets constraints;
+  /// Where each family's incidences start, and its slot stride (see the diagram above).
+  std::array<std::size_t, kConstraintFamilyCount> incidence_base{};
+  std::array<std::size_t, kConstraintFamilyCount> incidence_stride{};
   /// The (renumbered) particle of every incidence; padding incidences name particle 0 and
   /// belong to no particle's list.
   AlignedVector<ParticleIndex> incidence_particle;

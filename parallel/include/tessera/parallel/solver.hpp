@@ -148,17 +148,14 @@ class Solver {
   void run_blocks(std::span<const ScheduleBlock> blocks, ParticleArrays particles,
                   ConstraintSets& sets, const ProjectionSettings& projection);
   void jacobi_iteration(const ProjectionSettings& projection);
-  void copy_incidences_in();
   template <class Body>
   void parallel_chunks(std::size_t count, std::size_t chunk, Body&& body);
 
   SolverSettings settings_;
   Schedule schedule_;
   ParticleState state_;
-  /// The Jacobi set's private particle copies.
-  AlignedVector<Real> incidence_x_, incidence_y_, incidence_z_, incidence_inverse_mass_;
-  /// The incidences hold the current positions (mode jacobi, between iterations).
-  bool incidences_current_ = false;
+  /// The Jacobi set's incidences: each slot's corrected position.
+  AlignedVector<Real> incidence_x_, incidence_y_, incidence_z_;
   /// λ of each family of the Jacobi set (nullptr: none).
   std::array<Real*, kConstraintFamilyCount> jacobi_lambda_{};
   std::unique_ptr<tbb::task_arena> arena_;

@@ -35,6 +35,7 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 #include "constraint_validation.hpp"
+#include "degenerate_shape.hpp"
 
 namespace tessera {
 
@@ -56,9 +57,11 @@ DihedralConstraints make_dihedral_constraints(const DihedralConstraintInput& inp
     // The constraint's own degenerate cases, named.
     if (!((p[3] - p[2]).squaredNorm() > tolerance_squared))
       validator.fail(c, "degenerate rest stencil: shared edge p2-p3 has zero length");
-    if (!((p[2] - p[0]).cross(p[3] - p[0]).squaredNorm() > tolerance_squared))
+    if (detail::flat_triangle((p[2] - p[0]).cross(p[3] - p[0]).norm(),
+                              detail::longest_edge({p[0], p[2], p[3]})))
       validator.fail(c, "degenerate rest stencil: triangle (p0, p2, p3) has zero area");
-    if (!((p[3] - p[1]).cross(p[2] - p[1]).squaredNorm() > tolerance_squared))
+    if (detail::flat_triangle((p[3] - p[1]).cross(p[2] - p[1]).norm(),
+                              detail::longest_edge({p[1], p[3], p[2]})))
       validator.fail(c, "degenerate rest stencil: triangle (p1, p3, p2) has zero area");
     // φ0 is C at rest for φ0 = 0, evaluated by the formula every projection uses.
     const auto at_rest = lanes::dihedral_constraint<Real>(

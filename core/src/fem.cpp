@@ -12,6 +12,7 @@
 #include <tessera/core/position_based_dynamics.hpp>
 #include <tessera/core/xpbd.hpp>
 
+#include "degenerate_shape.hpp"
 #include "kernels/fem-inl.h"
 #include "scalar_projection.hpp"
 
@@ -37,7 +38,7 @@ bool PositionBasedDynamics::init_FEMTriangleConstraint(const Vector3r& p0, const
   const Vector3r edge2 = p2 - p0;
   const Vector3r normal = edge1.cross(edge2);
   const Real twice_area = normal.norm();
-  if (!(Real(0.5) * twice_area > kDegenerateTolerance)) {
+  if (detail::flat_triangle(twice_area, detail::longest_edge({p0, p1, p2}))) {
     area = 0;
     invRestMat.setZero();
     return false;
@@ -81,7 +82,8 @@ bool PositionBasedDynamics::init_FEMTetraConstraint(const Vector3r& p0, const Ve
   rest.col(1) = p2 - p0;
   rest.col(2) = p3 - p0;
   const Real signed_volume = rest.determinant() / 6;
-  if (!(std::abs(signed_volume) > kDegenerateTolerance)) {
+  if (detail::flat_tetrahedron(6 * std::abs(signed_volume),
+                               detail::longest_edge({p0, p1, p2, p3}))) {
     volume = 0;
     invRestMat.setZero();
     return false;

@@ -18,6 +18,7 @@
 #include <tessera/core/position_based_dynamics.hpp>
 #include <tessera/core/xpbd.hpp>
 
+#include "degenerate_shape.hpp"
 #include "isometric_bending_factor.hpp"
 #include "kernels/isometric_bending-inl.h"
 #include "scalar_projection.hpp"
@@ -36,8 +37,9 @@ bool build_bending_matrix(const Vector3r& p0, const Vector3r& p1, const Vector3r
   const Vector3r edge = p3 - p2;
   const Real twice_area0 = (p2 - p0).cross(p3 - p0).norm();
   const Real twice_area1 = (p3 - p1).cross(p2 - p1).norm();
-  if (!(edge.norm() > kDegenerateTolerance) || !(twice_area0 > kDegenerateTolerance) ||
-      !(twice_area1 > kDegenerateTolerance))
+  if (!(edge.norm() > kDegenerateTolerance) ||
+      detail::flat_triangle(twice_area0, detail::longest_edge({p0, p2, p3})) ||
+      detail::flat_triangle(twice_area1, detail::longest_edge({p1, p3, p2})))
     return false;
 
   const Real cot_p2_wing0 = cotangent(p0 - p2, edge, twice_area0);

@@ -42,6 +42,7 @@ HWY_AFTER_NAMESPACE();
 #include <tessera/core/position_based_dynamics.hpp>
 
 #include "constraint_validation.hpp"
+#include "degenerate_shape.hpp"
 #include "isometric_bending_factor.hpp"
 
 namespace tessera {
@@ -68,9 +69,11 @@ IsometricBendingConstraints make_isometric_bending_constraints(
     // init_IsometricBendingConstraint's degenerate cases, named.
     if (!((p[3] - p[2]).norm() > kDegenerateTolerance))
       validator.fail(c, "degenerate rest stencil: shared edge p2-p3 has zero length");
-    if (!((p[2] - p[0]).cross(p[3] - p[0]).norm() > kDegenerateTolerance))
+    if (detail::flat_triangle((p[2] - p[0]).cross(p[3] - p[0]).norm(),
+                              detail::longest_edge({p[0], p[2], p[3]})))
       validator.fail(c, "degenerate rest stencil: triangle (p0, p2, p3) has zero area");
-    if (!((p[3] - p[1]).cross(p[2] - p[1]).norm() > kDegenerateTolerance))
+    if (detail::flat_triangle((p[3] - p[1]).cross(p[2] - p[1]).norm(),
+                              detail::longest_edge({p[1], p[3], p[2]})))
       validator.fail(c, "degenerate rest stencil: triangle (p1, p3, p2) has zero area");
     Matrix4r Q;
     if (!PositionBasedDynamics::init_IsometricBendingConstraint(p[0], p[1], p[2], p[3], Q) ||

@@ -6,6 +6,7 @@
 
 #include <tessera/core/position_based_dynamics.hpp>
 
+#include "degenerate_shape.hpp"
 #include "kernels/strain-inl.h"
 #include "scalar_projection.hpp"
 
@@ -39,8 +40,10 @@ bool PositionBasedDynamics::init_StrainTriangleConstraint(const Vector3r& p0,
                                                           Matrix2r& invRestMat) {
   Eigen::Matrix<Real, 2, 2> rest;
   rest << p1.x() - p0.x(), p2.x() - p0.x(), p1.y() - p0.y(), p2.y() - p0.y();
-  const Real area = Real(0.5) * std::abs(rest.determinant());
-  if (!(area > kDegenerateTolerance)) {
+  // The rest triangle is taken in the xy plane: its edges there.
+  const auto in_plane = [](const Vector3r& p) { return Vector3r(p.x(), p.y(), 0); };
+  if (detail::flat_triangle(std::abs(rest.determinant()),
+                            detail::longest_edge({in_plane(p0), in_plane(p1), in_plane(p2)}))) {
     invRestMat.setZero();
     return false;
   }
@@ -66,8 +69,8 @@ bool PositionBasedDynamics::init_StrainTetraConstraint(const Vector3r& p0, const
   rest.col(0) = p1 - p0;
   rest.col(1) = p2 - p0;
   rest.col(2) = p3 - p0;
-  const Real volume = std::abs(rest.determinant()) / 6;
-  if (!(volume > kDegenerateTolerance)) {
+  if (detail::flat_tetrahedron(std::abs(rest.determinant()),
+                               detail::longest_edge({p0, p1, p2, p3}))) {
     invRestMat.setZero();
     return false;
   }

@@ -15,8 +15,9 @@
 //   ∇_{p3} ψ = -s0 ∇_{p0} ψ - s1 ∇_{p1} ψ,      s_k = (p_k - p2) · e / |e|²,
 // and ∇C = sign(ψ) ∇ψ with sign(ψ) = +1 at ψ = 0 (a flat stencil with φ0 > 0 buckles towards
 // positive ψ, deterministically).
-// Invalid lane (zero corrections): |e|² ≤ tol² or |N1|² ≤ tol² or |N2|² ≤ tol² (zero-length
-// edge, zero-area triangle), tol = kDegenerateTolerance.
+// Invalid lane (zero corrections): |e|² ≤ tol² (zero-length edge) or |N_k|² ≤ tol² |e|⁴ (a
+// wing triangle whose height over the edge is below tol |e|: flat at any scale), with
+// tol = kDegenerateTolerance.
 #if defined(TESSERA_CORE_KERNELS_DIHEDRAL_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef TESSERA_CORE_KERNELS_DIHEDRAL_INL_H_
 #undef TESSERA_CORE_KERNELS_DIHEDRAL_INL_H_
@@ -65,9 +66,9 @@ HWY_INLINE ConstraintValue<V, 4> dihedral_constraint(const Vec3<V>& p0, const Ve
   const V normal1_squared = squared_norm(normal1);
   const V tolerance_squared =
       splat<V>(double(kDegenerateTolerance) * double(kDegenerateTolerance));
+  const V flat_below = tolerance_squared * edge_squared * edge_squared;
   value.valid = mask_and(edge_squared > tolerance_squared,
-                         mask_and(normal0_squared > tolerance_squared,
-                                  normal1_squared > tolerance_squared));
+                         mask_and(normal0_squared > flat_below, normal1_squared > flat_below));
 
   const V edge_length = lane_sqrt(edge_squared);
   const V sine_part =  // |N1||N2| sin ψ

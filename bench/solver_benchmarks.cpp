@@ -137,6 +137,26 @@ void register_benchmarks() {
     }
 }
 
+/// solver/block_size/<scene>/block:<B>/threads:2: gs with work blocks of B constraints, how
+/// kDefaultBlockSize was chosen.
+void BM_BlockSize(benchmark::State& state, const std::string& scene_name) {
+  const Model& model = scene(scene_name);
+  SolverSettings settings;
+  settings.threads = 2;
+  settings.block_size = std::size_t(state.range(0));
+  settings.report_residuals = false;
+  Solver solver(model, colouring(scene_name, kDefaultStrategy).colouring, settings);
+  solver.step();
+  for (auto _ : state) solver.project(1, settings.time_step);
+  state.SetItemsProcessed(state.iterations() * std::int64_t(model.constraints.size()));
+}
+BENCHMARK_CAPTURE(BM_BlockSize, cloth256, std::string("cloth256"))
+    ->Name("solver/block_size/cloth256")->ArgName("block")->RangeMultiplier(4)->Range(64, 16384)
+    ->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_BlockSize, tetbar200k, std::string("tetbar200k"))
+    ->Name("solver/block_size/tetbar200k")->ArgName("block")->RangeMultiplier(4)
+    ->Range(64, 16384)->UseRealTime()->Unit(benchmark::kMillisecond);
+
 const int kRegistered = (register_benchmarks(), 0);
 
 }  // namespace

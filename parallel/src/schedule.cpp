@@ -97,10 +97,18 @@ Batch reorder(const Batch& in, std::span<const std::uint32_t> source,
   return out;
 }
 
-/// Splits [begin, end) of one family into blocks of at most block_size (begin is aligned, so
-/// every block starts on a kMaxLanes boundary).
+/// Splits [begin, end) of one family into blocks (begin is aligned, so every block starts on a
+/// kMaxLanes boundary): at most block_size constraints, and small enough that every worker
+/// gets about kBlocksPerThread of them (a colour of 7,000 tetrahedra is 14 blocks of 512 but
+/// must feed 64 threads). Block boundaries never change a result: the constraints of a range
+/// are independent and each SIMD lane computes alone.
+constexpr std::size_t kBlocksPerThread = 4;
 void split_into_blocks(ConstraintFamily family, std::size_t begin, std::size_t end,
-                       std::size_t block_size, std::vector<ScheduleBlock>& blocks) {
+                       const ScheduleOptions& options, std::vector<ScheduleBlock>& blocks) {
+  const std::size_t per_thread =
+      (end - begin + kBlocksPerThread * options.threads - 1) / (kBlocksPerThread * options.threads);
+  const std::size_t block_size =
+      std::clamp(round_up(per_thread, kMaxLanes), kMaxLanes, options.block_size);
   for (std::size_t b = begin; b < end; b += block_size)
     blocks.push_back({family, std::uint32_t(b), std::uint32_t(std::min(end, b + block_size))});
 }
@@ -139,6 +147,7 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
   if (options_.block_size == 0)
     throw InvalidInput("schedule: block size must be at least 1 constraint");
   options_.block_size = round_up(options_.block_size, kMaxLanes);
+  options_.threads = std::max<std::size_t>(options_.threads, 1);
   const auto sizes = model.constraints.sizes();
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
     family_first_[f + 1] = family_first_[f] + ConstraintIndex(sizes[f]);
@@ -206,7 +215,7 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
       if (to_jacobi) continue;
       const std::size_t end = source.size();
       ranges_[f].push_back({ConstraintFamily(f), std::uint32_t(begin), std::uint32_t(end)});
-      split_into_blocks(ConstraintFamily(f), begin, end, options_.block_size, blocks_);
+      split_into_blocks(ConstraintFamily(f), begin, end, options_, blocks_);
     }
     if (!to_jacobi) {
       phase_offsets_.push_back(blocks_.size());
@@ -287,7 +296,7 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
     };
     batch = reorder(detail::same_family(model.constraints, batch), source, particle_count,
                     renumber_and_record);
-    split_into_blocks(family, 0, source.size(), options_.block_size, jacobi_.blocks);
+    split_into_blocks(family, 0, source.size(), options_, jacobi_.blocks);
     jacobi_.constraint_count += source.size();
   });
 

@@ -101,8 +101,12 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
     : settings_(settings) {
   check_settings(settings_);
   const auto start = Clock::now();
+  const std::size_t threads = settings_.mode == SolverMode::sequential ? 1
+                              : settings_.threads == 0
+                                  ? std::size_t(tbb::info::default_concurrency())
+                                  : settings_.threads;
   schedule_ = Schedule(model, &colouring,
-                       {settings_.mode, settings_.block_size, settings_.hybrid_threshold});
+                       {settings_.mode, settings_.block_size, settings_.hybrid_threshold, threads});
   state_ = scheduled_particles(model.particles, schedule_);
   const std::size_t incidences = schedule_.jacobi().incidence_count;
   incidence_x_.assign(incidences, 0);
@@ -113,10 +117,6 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
   });
   statistics_.seconds_schedule = seconds_since(start);
 
-  const std::size_t threads = settings_.mode == SolverMode::sequential ? 1
-                              : settings_.threads == 0
-                                  ? std::size_t(tbb::info::default_concurrency())
-                                  : settings_.threads;
   arena_ = std::make_unique<tbb::task_arena>(int(threads));
   statistics_.threads = threads;
   statistics_.particles = state_.size();

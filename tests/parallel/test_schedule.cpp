@@ -157,6 +157,29 @@ TEST(Schedule, GaussSeidelLayoutCoversEveryConstraintOnceForEveryStrategy) {
     }
 }
 
+TEST(Schedule, BlocksShrinkSoThatEveryThreadGetsWork) {
+  const Model model = test::tet_bar_model(4, 4, 12);
+  const Colouring colouring = test::colour_model(model, "stencil");
+  for (const std::size_t threads : {1, 2, 8, 64}) {
+    SCOPED_TRACE(threads);
+    const Schedule schedule(model, &colouring, {SolverMode::gs, 512, 0, threads});
+    for (std::size_t phase = 0; phase < schedule.phase_count(); ++phase) {
+      const std::size_t size = schedule.phase_sizes()[phase];
+      const std::size_t blocks = schedule.phase_blocks(phase).size();
+      // Never above block_size; at least two blocks per thread while blocks can shrink; the
+      // smallest blocks are one vector wide.
+      for (const ScheduleBlock& block : schedule.phase_blocks(phase))
+        EXPECT_LE(block.end - block.begin, 512u);
+      if (size >= 4 * threads * kMaxLanes) {
+        EXPECT_GE(blocks, 2 * threads);
+      } else {
+        EXPECT_EQ(blocks, (size + kMaxLanes - 1) / kMaxLanes);
+      }
+    }
+    check_layout(model, colouring, schedule);
+  }
+}
+
 TEST(Schedule, LocalityRenumberingMapsBackToTheUsersParticles) {
   const Model model = test::cloth_model(20, 20);
   ColouringOptions options;

@@ -62,9 +62,12 @@ inline constexpr std::size_t kDefaultHybridThreshold = 1024;
 
 struct ScheduleOptions {
   SolverMode mode = SolverMode::gs;
-  /// Constraints per work block, rounded up to a multiple of kMaxLanes.
+  /// Constraints per work block at most, rounded up to a multiple of kMaxLanes.
   std::size_t block_size = kDefaultBlockSize;
   std::size_t hybrid_threshold = kDefaultHybridThreshold;
+  /// Threads the blocks are for: a colour is cut into smaller blocks (down to kMaxLanes) when
+  /// it has fewer than 4 per thread of block_size. Any value gives the same results.
+  std::size_t threads = 1;
 };
 
 /// Constraints [begin, end) of one family's scheduled batch: one unit of parallel work.

@@ -64,6 +64,17 @@ Real* lambda_of(Batch&) {
   return nullptr;
 }
 
+/// The settings a family is projected with: the proximity families have no XPBD form, so the
+/// solver projects them with their PBD stiffness under either semantics (as the strain, FEM
+/// triangle and shape-matching kernels do by themselves); the others as given.
+template <class Batch>
+ProjectionSettings settings_for(const Batch&, const ProjectionSettings& settings) {
+  if constexpr (requires(Batch b) { b.compression_stiffness; })
+    return {ConstraintSemantics::stiffness, settings.dt};
+  else
+    return settings;
+}
+
 inline void project_batch(ParticleArrays p, DistanceConstraints& b, std::size_t begin,
                           std::size_t end, const ProjectionSettings& s) {
   project_distance_constraints(p, b, begin, end, s);
@@ -82,15 +93,15 @@ inline void project_batch(ParticleArrays p, VolumeConstraints& b, std::size_t be
 }
 inline void project_batch(ParticleArrays p, EdgePointDistanceConstraints& b, std::size_t begin,
                           std::size_t end, const ProjectionSettings& s) {
-  project_edge_point_distance_constraints(p, b, begin, end, s);
+  project_edge_point_distance_constraints(p, b, begin, end, settings_for(b, s));
 }
 inline void project_batch(ParticleArrays p, TrianglePointDistanceConstraints& b,
                           std::size_t begin, std::size_t end, const ProjectionSettings& s) {
-  project_triangle_point_distance_constraints(p, b, begin, end, s);
+  project_triangle_point_distance_constraints(p, b, begin, end, settings_for(b, s));
 }
 inline void project_batch(ParticleArrays p, EdgeEdgeDistanceConstraints& b, std::size_t begin,
                           std::size_t end, const ProjectionSettings& s) {
-  project_edge_edge_distance_constraints(p, b, begin, end, s);
+  project_edge_edge_distance_constraints(p, b, begin, end, settings_for(b, s));
 }
 inline void project_batch(ParticleArrays p, StrainTriangleConstraints& b, std::size_t begin,
                           std::size_t end, const ProjectionSettings& s) {

@@ -15,17 +15,21 @@ namespace tessera {
 
 namespace detail {
 
-std::vector<ResidualRange> residual_ranges(const Schedule& schedule, std::size_t chunk) {
+std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
+                                           const ConstraintSets& dynamic, std::size_t chunk) {
   std::vector<ResidualRange> ranges;
-  const auto add = [&](ConstraintFamily family, bool jacobi, std::size_t begin, std::size_t end) {
+  const auto add = [&](ConstraintFamily family, ResidualRange::Set set, std::size_t begin,
+                       std::size_t end) {
     for (std::size_t b = begin; b < end; b += chunk)
-      ranges.push_back({family, jacobi, std::uint32_t(b), std::uint32_t(std::min(end, b + chunk))});
+      ranges.push_back({family, set, std::uint32_t(b), std::uint32_t(std::min(end, b + chunk))});
   };
   const auto jacobi_sizes = schedule.jacobi().constraints.sizes();
+  const auto dynamic_sizes = dynamic.sizes();
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
     for (const ScheduleBlock& r : schedule.coloured_ranges(ConstraintFamily(f)))
-      add(r.family, false, r.begin, r.end);
-    add(ConstraintFamily(f), true, 0, jacobi_sizes[f]);
+      add(r.family, ResidualRange::coloured, r.begin, r.end);
+    add(ConstraintFamily(f), ResidualRange::jacobi, 0, jacobi_sizes[f]);
+    add(ConstraintFamily(f), ResidualRange::dynamic, 0, dynamic_sizes[f]);
   }
   return ranges;
 }

@@ -13,10 +13,12 @@
 
 namespace tessera::detail {
 
-/// Constraints [begin, end) of one family of the coloured batches or of the Jacobi set.
+/// Constraints [begin, end) of one family of the coloured batches, the Jacobi set or the
+/// dynamic constraints.
 struct ResidualRange {
+  enum Set : std::uint8_t { coloured, jacobi, dynamic };
   ConstraintFamily family;
-  bool jacobi;
+  Set set;
   std::uint32_t begin;
   std::uint32_t end;
 };
@@ -26,8 +28,10 @@ struct ResidualPartial {
   double max = 0;
 };
 
-/// Every real constraint of the schedule, in ranges of at most `chunk` constraints.
-std::vector<ResidualRange> residual_ranges(const Schedule& schedule, std::size_t chunk);
+/// Every real constraint of the schedule and of `dynamic`, in ranges of at most `chunk`
+/// constraints.
+std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
+                                           const ConstraintSets& dynamic, std::size_t chunk);
 
 /// The partial sums of one range, at `particles`.
 ResidualPartial residual_of_range(const ResidualRange& range, const ConstraintSets& sets,

@@ -6,6 +6,7 @@
 #include <tessera/parallel/schedule.hpp>
 
 #include <algorithm>
+#include <functional>
 #include <limits>
 #include <string>
 #include <tuple>
@@ -15,6 +16,7 @@
 #include <tessera/core/simd.hpp>
 
 #include "constraint_family.hpp"
+#include "jacobi_set_builder.hpp"
 
 namespace tessera {
 
@@ -123,6 +125,117 @@ struct IncidenceLayout {
 };
 
 }  // namespace
+
+namespace detail {
+
+JacobiSet build_jacobi_set(
+    const ConstraintSets& sets,
+    std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>& source_of_family,
+    std::size_t particle_count, const std::function<ParticleIndex(ParticleIndex)>& renumber,
+    const std::function<bool(ParticleIndex)>& movable, const ScheduleOptions& options) {
+  JacobiSet jacobi;
+  // The constraints are projected all at once, so their order is free: sort them by their
+  // smallest (renumbered) particle. Then the incidences of neighbouring particles lie close
+  // together in every slot array, and the per-particle sums read memory almost in order (in
+  // colour order they jumped across the whole set).
+  sets.for_each([&](ConstraintFamily family, const auto& batch) {
+    using Batch = std::decay_t<decltype(batch)>;
+    auto& source = source_of_family[std::size_t(family)];
+    if (source.empty()) return;
+    std::vector<std::pair<ParticleIndex, std::uint32_t>> keyed(source.size());
+    for (std::size_t j = 0; j < source.size(); ++j) {
+      ParticleIndex smallest = std::numeric_limits<ParticleIndex>::max();
+      if constexpr (detail::arity_of<Batch>() == 0) {
+        for (auto e = batch.offsets[source[j]]; e < batch.offsets[source[j] + 1]; ++e)
+          smallest = std::min(smallest, renumber(batch.particle[e]));
+      } else {
+        for (const auto& slot : batch.particles.particle)
+          smallest = std::min(smallest, renumber(slot[source[j]]));
+      }
+      keyed[j] = {smallest, source[j]};
+    }
+    std::sort(keyed.begin(), keyed.end());
+    for (std::size_t j = 0; j < source.size(); ++j) source[j] = keyed[j].second;
+  });
+
+  // Incidences family by family.
+  std::array<IncidenceLayout, kConstraintFamilyCount> layout;
+  std::size_t incidences = 0;
+  sets.for_each([&](ConstraintFamily family, const auto& batch) {
+    using Batch = std::decay_t<decltype(batch)>;
+    const auto& source = source_of_family[std::size_t(family)];
+    IncidenceLayout& l = layout[std::size_t(family)];
+    l.base = incidences;
+    if constexpr (detail::arity_of<Batch>() == 0) {
+      std::size_t entries = 0;
+      for (const std::uint32_t s : source) entries += batch.offsets[s + 1] - batch.offsets[s];
+      l.size = padded_size(entries);
+    } else {
+      l.stride = padded_size(source.size());
+      l.size = source.empty() ? 0 : l.stride * detail::arity_of<Batch>();
+    }
+    incidences += l.size;
+  });
+  jacobi.incidence_count = padded_size(incidences);
+  jacobi.incidence_particle.assign(jacobi.incidence_count, 0);
+  std::vector<std::uint8_t> real_incidence(jacobi.incidence_count, 0);
+  jacobi.constraints.for_each([&](ConstraintFamily family, auto& batch) {
+    const auto& source = source_of_family[std::size_t(family)];
+    const IncidenceLayout& l = layout[std::size_t(family)];
+    jacobi.incidence_base[std::size_t(family)] = l.base;
+    jacobi.incidence_stride[std::size_t(family)] = l.stride;
+    const auto renumber_and_record = [&](std::size_t k, std::size_t j, ParticleIndex p) {
+      const std::size_t incidence = l.base + k * l.stride + j;
+      jacobi.incidence_particle[incidence] = renumber(p);
+      real_incidence[incidence] = 1;
+      return renumber(p);
+    };
+    batch = reorder(detail::same_family(sets, batch), source, particle_count, renumber_and_record);
+    split_into_blocks(family, 0, source.size(), options, jacobi.blocks);
+    jacobi.constraint_count += source.size();
+  });
+
+  // Each movable particle's incidences, ascending (counting sort by particle).
+  std::vector<std::uint32_t> count(particle_count + 1, 0);
+  for (std::size_t i = 0; i < jacobi.incidence_count; ++i)
+    if (real_incidence[i] && movable(jacobi.incidence_particle[i]))
+      ++count[jacobi.incidence_particle[i] + 1];
+  for (std::size_t p = 0; p < particle_count; ++p)
+    if (count[p + 1] != 0) jacobi.particles.push_back(ParticleIndex(p));
+  std::vector<std::uint32_t> start(particle_count + 1, 0);
+  for (std::size_t p = 0; p < particle_count; ++p) start[p + 1] = start[p] + count[p + 1];
+  jacobi.particle_incidences.resize(start[particle_count]);
+  jacobi.particle_offsets.reserve(jacobi.particles.size() + 1);
+  for (const ParticleIndex p : jacobi.particles) jacobi.particle_offsets.push_back(start[p]);
+  jacobi.particle_offsets.push_back(start[particle_count]);
+  for (std::size_t i = 0; i < jacobi.incidence_count; ++i)
+    if (real_incidence[i] && movable(jacobi.incidence_particle[i]))
+      jacobi.particle_incidences[start[jacobi.incidence_particle[i]]++] = std::uint32_t(i);
+
+  // λ shares: the mean count over each constraint's movable incidences.
+  jacobi.constraints.for_each([&](ConstraintFamily family, auto& batch) {
+    if (detail::lambda_of(batch) == nullptr || batch.size() == 0) return;
+    constexpr std::size_t N = detail::arity_of<std::decay_t<decltype(batch)>>();
+    if constexpr (N != 0) {
+      auto& share = jacobi.lambda_share[std::size_t(family)];
+      share.assign(padded_size(batch.size()), 0);
+      for (std::size_t j = 0; j < batch.size(); ++j) {
+        std::size_t movable_particles = 0, incidences_there = 0;
+        for (std::size_t k = 0; k < N; ++k) {
+          const ParticleIndex p = batch.particles.particle[k][j];
+          if (!movable(p)) continue;
+          ++movable_particles;
+          incidences_there += count[p + 1];
+        }
+        if (incidences_there != 0)
+          share[j] = Real(double(movable_particles) / double(incidences_there));
+      }
+    }
+  });
+  return jacobi;
+}
+
+}  // namespace detail
 
 std::string_view solver_mode_name(SolverMode mode) {
   switch (mode) {
@@ -235,113 +348,17 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
     batch = reorder(input, coloured_source[std::size_t(family)], particle_count, renumber);
   });
 
-  // The Jacobi set's constraints are projected all at once, so their order is free: sort them
-  // by their smallest (renumbered) particle. Then the incidences of neighbouring particles lie
-  // close together in every slot array, and the per-particle sums read memory almost in
-  // order (in colour order they jumped across the whole set).
-  model.constraints.for_each([&](ConstraintFamily family, const auto& batch) {
-    using Batch = std::decay_t<decltype(batch)>;
-    auto& source = jacobi_source[std::size_t(family)];
-    if (source.empty()) return;
-    std::vector<std::pair<ParticleIndex, std::uint32_t>> keyed(source.size());
-    for (std::size_t j = 0; j < source.size(); ++j) {
-      ParticleIndex smallest = std::numeric_limits<ParticleIndex>::max();
-      if constexpr (detail::arity_of<Batch>() == 0) {
-        for (auto e = batch.offsets[source[j]]; e < batch.offsets[source[j] + 1]; ++e)
-          smallest = std::min(smallest, scheduled_particle(batch.particle[e]));
-      } else {
-        for (const auto& slot : batch.particles.particle)
-          smallest = std::min(smallest, scheduled_particle(slot[source[j]]));
-      }
-      keyed[j] = {smallest, source[j]};
-    }
-    std::sort(keyed.begin(), keyed.end());
-    for (std::size_t j = 0; j < source.size(); ++j) {
-      source[j] = keyed[j].second;
-      location_[family_first_[std::size_t(family)] + source[j]] = std::uint32_t(j) | kJacobiBit;
-    }
-  });
-
-  // The Jacobi set: incidences family by family.
-  std::array<IncidenceLayout, kConstraintFamilyCount> layout;
-  std::size_t incidences = 0;
-  model.constraints.for_each([&](ConstraintFamily family, const auto& batch) {
-    using Batch = std::decay_t<decltype(batch)>;
-    const auto& source = jacobi_source[std::size_t(family)];
-    IncidenceLayout& l = layout[std::size_t(family)];
-    l.base = incidences;
-    if constexpr (detail::arity_of<Batch>() == 0) {
-      std::size_t entries = 0;
-      for (const std::uint32_t s : source) entries += batch.offsets[s + 1] - batch.offsets[s];
-      l.size = padded_size(entries);
-    } else {
-      l.stride = padded_size(source.size());
-      l.size = source.empty() ? 0 : l.stride * detail::arity_of<Batch>();
-    }
-    incidences += l.size;
-  });
-  jacobi_.incidence_count = padded_size(incidences);
-  jacobi_.incidence_particle.assign(jacobi_.incidence_count, 0);
-  std::vector<std::uint8_t> real_incidence(jacobi_.incidence_count, 0);
-  jacobi_.constraints.for_each([&](ConstraintFamily family, auto& batch) {
-    const auto& source = jacobi_source[std::size_t(family)];
-    const IncidenceLayout& l = layout[std::size_t(family)];
-    jacobi_.incidence_base[std::size_t(family)] = l.base;
-    jacobi_.incidence_stride[std::size_t(family)] = l.stride;
-    const auto renumber_and_record = [&](std::size_t k, std::size_t j, ParticleIndex p) {
-      const std::size_t incidence = l.base + k * l.stride + j;
-      jacobi_.incidence_particle[incidence] = scheduled_particle(p);
-      real_incidence[incidence] = 1;
-      return scheduled_particle(p);
-    };
-    batch = reorder(detail::same_family(model.constraints, batch), source, particle_count,
-                    renumber_and_record);
-    split_into_blocks(family, 0, source.size(), options_, jacobi_.blocks);
-    jacobi_.constraint_count += source.size();
-  });
-
-  // Each movable particle's incidences, ascending (counting sort by particle).
-  std::vector<std::uint32_t> count(particle_count + 1, 0);
-  const auto movable = [&](ParticleIndex scheduled) {
-    return model.particles.inverse_mass[user_particle(scheduled)] > 0;
-  };
-  for (std::size_t i = 0; i < jacobi_.incidence_count; ++i)
-    if (real_incidence[i] && movable(jacobi_.incidence_particle[i]))
-      ++count[jacobi_.incidence_particle[i] + 1];
-  for (std::size_t p = 0; p < particle_count; ++p) {
-    if (count[p + 1] == 0) continue;
-    jacobi_.particles.push_back(ParticleIndex(p));
-  }
-  std::vector<std::uint32_t> start(particle_count + 1, 0);
-  for (std::size_t p = 0; p < particle_count; ++p) start[p + 1] = start[p] + count[p + 1];
-  jacobi_.particle_incidences.resize(start[particle_count]);
-  jacobi_.particle_offsets.reserve(jacobi_.particles.size() + 1);
-  for (const ParticleIndex p : jacobi_.particles) jacobi_.particle_offsets.push_back(start[p]);
-  jacobi_.particle_offsets.push_back(start[particle_count]);
-  for (std::size_t i = 0; i < jacobi_.incidence_count; ++i)
-    if (real_incidence[i] && movable(jacobi_.incidence_particle[i]))
-      jacobi_.particle_incidences[start[jacobi_.incidence_particle[i]]++] = std::uint32_t(i);
-
-  // λ shares: the mean count over each constraint's movable incidences.
-  jacobi_.constraints.for_each([&](ConstraintFamily family, auto& batch) {
-    if (detail::lambda_of(batch) == nullptr || batch.size() == 0) return;
-    constexpr std::size_t N = detail::arity_of<std::decay_t<decltype(batch)>>();
-    if constexpr (N != 0) {
-      auto& share = jacobi_.lambda_share[std::size_t(family)];
-      share.assign(padded_size(batch.size()), 0);
-      for (std::size_t j = 0; j < batch.size(); ++j) {
-        std::size_t movable_particles = 0, incidences_there = 0;
-        for (std::size_t k = 0; k < N; ++k) {
-          const ParticleIndex p = batch.particles.particle[k][j];
-          if (!movable(p)) continue;
-          ++movable_particles;
-          incidences_there += count[p + 1];
-        }
-        if (incidences_there != 0)
-          share[j] = Real(double(movable_particles) / double(incidences_there));
-      }
-    }
-  });
+  // The Jacobi set (sorts each family's list, see build_jacobi_set).
+  jacobi_ = detail::build_jacobi_set(
+      model.constraints, jacobi_source, particle_count,
+      [&](ParticleIndex p) { return scheduled_particle(p); },
+      [&](ParticleIndex scheduled) {
+        return model.particles.inverse_mass[user_particle(scheduled)] > 0;
+      },
+      options_);
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
+    for (std::size_t j = 0; j < jacobi_source[f].size(); ++j)
+      location_[family_first_[f] + jacobi_source[f][j]] = std::uint32_t(j) | kJacobiBit;
 }
 
 ConstraintLocation Schedule::locate(ConstraintIndex user_constraint) const {

@@ -20,6 +20,7 @@
 #include <tessera/core/sequential_projection.hpp>
 
 #include "constraint_family.hpp"
+#include "jacobi_set_builder.hpp"
 #include "residual_sum.hpp"
 
 namespace tessera {
@@ -108,13 +109,7 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
   schedule_ = Schedule(model, &colouring,
                        {settings_.mode, settings_.block_size, settings_.hybrid_threshold, threads});
   state_ = scheduled_particles(model.particles, schedule_);
-  const std::size_t incidences = schedule_.jacobi().incidence_count;
-  incidence_x_.assign(incidences, 0);
-  incidence_y_.assign(incidences, 0);
-  incidence_z_.assign(incidences, 0);
-  schedule_.jacobi().constraints.for_each([&](ConstraintFamily family, auto& batch) {
-    jacobi_lambda_[std::size_t(family)] = detail::lambda_of(batch);
-  });
+  jacobi_work_.bind(schedule_.jacobi());
   statistics_.seconds_schedule = seconds_since(start);
 
   arena_ = std::make_unique<tbb::task_arena>(int(threads));
@@ -172,9 +167,19 @@ void Solver::run_blocks(std::span<const ScheduleBlock> blocks, ParticleArrays pa
   });
 }
 
-void Solver::jacobi_iteration(const ProjectionSettings& projection) {
-  JacobiSet& jacobi = schedule_.jacobi();
+void Solver::JacobiWork::bind(const JacobiSet& jacobi) {
+  x.assign(jacobi.incidence_count, 0);
+  y.assign(jacobi.incidence_count, 0);
+  z.assign(jacobi.incidence_count, 0);
+}
+
+void Solver::jacobi_iteration(JacobiSet& jacobi, JacobiWork& work,
+                              const ProjectionSettings& projection) {
   if (jacobi.constraint_count == 0) return;
+  std::array<Real*, kConstraintFamilyCount> lambdas{};
+  jacobi.constraints.for_each([&](ConstraintFamily family, auto& batch) {
+    lambdas[std::size_t(family)] = detail::lambda_of(batch);
+  });
   const Real omega = settings_.jacobi_relaxation;
   parallel_chunks(jacobi.blocks.size(), 1, [&](std::size_t first, std::size_t last) {
     for (std::size_t b = first; b < last; ++b) {
@@ -182,11 +187,11 @@ void Solver::jacobi_iteration(const ProjectionSettings& projection) {
       const std::size_t f = std::size_t(block.family);
       // Gather from the particles, store into this family's incidences.
       ParticleArrays particles = ParticleArrays::of(state_);
-      particles.corrected_x = incidence_x_.data() + jacobi.incidence_base[f];
-      particles.corrected_y = incidence_y_.data() + jacobi.incidence_base[f];
-      particles.corrected_z = incidence_z_.data() + jacobi.incidence_base[f];
+      particles.corrected_x = work.x.data() + jacobi.incidence_base[f];
+      particles.corrected_y = work.y.data() + jacobi.incidence_base[f];
+      particles.corrected_z = work.z.data() + jacobi.incidence_base[f];
       particles.corrected_stride = jacobi.incidence_stride[f];
-      Real* lambda = jacobi_lambda_[f];
+      Real* lambda = lambdas[f];
       if (lambda == nullptr || projection.semantics != ConstraintSemantics::compliance) {
         kProjectBlock[f](particles, jacobi.constraints, block.begin, block.end, projection);
         continue;
@@ -213,9 +218,9 @@ void Solver::jacobi_iteration(const ProjectionSettings& projection) {
       Real dx = 0, dy = 0, dz = 0;
       for (std::uint32_t j = begin; j < end; ++j) {
         const std::uint32_t i = jacobi.particle_incidences[j];
-        dx += incidence_x_[i] - x;
-        dy += incidence_y_[i] - y;
-        dz += incidence_z_[i] - z;
+        dx += work.x[i] - x;
+        dy += work.y[i] - y;
+        dz += work.z[i] - z;
       }
       const Real scale = omega / Real(end - begin);
       state_.x[p] = x + scale * dx;
@@ -228,14 +233,19 @@ void Solver::jacobi_iteration(const ProjectionSettings& projection) {
 void Solver::iterate(const ProjectionSettings& projection) {
   ParticleArrays particles = ParticleArrays::of(state_);
   if (settings_.mode == SolverMode::sequential) {
-    schedule_.coloured().for_each([&](ConstraintFamily, auto& batch) {
-      if (batch.size() != 0) project_sequentially(particles, batch, 0, batch.size(), projection);
-    });
+    const auto in_order = [&](ConstraintFamily, auto& batch) {
+      if (batch.size() != 0)
+        project_sequentially(particles, batch, 0, batch.size(),
+                             detail::settings_for(batch, projection));
+    };
+    schedule_.coloured().for_each(in_order);
+    dynamic_sequential_.for_each(in_order);
     return;
   }
   for (std::size_t phase = 0; phase < schedule_.phase_count(); ++phase)
     run_blocks(schedule_.phase_blocks(phase), particles, schedule_.coloured(), projection);
-  jacobi_iteration(projection);
+  jacobi_iteration(schedule_.jacobi(), jacobi_work_, projection);
+  jacobi_iteration(dynamic_, dynamic_work_, projection);
 }
 
 void Solver::project(std::size_t iterations, Real dt) {
@@ -246,7 +256,8 @@ void Solver::project(std::size_t iterations, Real dt) {
   const auto start = Clock::now();
   for (std::size_t it = 0; it < iterations; ++it) iterate(projection);
   statistics_.seconds_projection += seconds_since(start);
-  statistics_.projections += std::uint64_t(iterations) * statistics_.constraints;
+  statistics_.projections +=
+      std::uint64_t(iterations) * (statistics_.constraints + dynamic_count_);
 }
 
 void Solver::reset_lambdas() {
@@ -256,6 +267,8 @@ void Solver::reset_lambdas() {
   };
   schedule_.coloured().for_each(reset);
   schedule_.jacobi().constraints.for_each(reset);
+  dynamic_.constraints.for_each(reset);
+  dynamic_sequential_.for_each(reset);
 }
 
 void Solver::integrate(Real h) {
@@ -313,7 +326,8 @@ void Solver::step() {
     }
     if (!(last && settings_.record_convergence))
       statistics_.seconds_projection += seconds_since(projection_start);
-    statistics_.projections += std::uint64_t(settings_.iterations) * statistics_.constraints;
+    statistics_.projections +=
+        std::uint64_t(settings_.iterations) * (statistics_.constraints + dynamic_count_);
     update_velocities(h);
     if (last && settings_.report_residuals) report_.residual_after = residual();
   }
@@ -322,15 +336,21 @@ void Solver::step() {
 }
 
 Residual Solver::residual() {
-  const auto ranges = detail::residual_ranges(schedule_, kResidualChunk);
+  const auto ranges = detail::residual_ranges(
+      schedule_,
+      settings_.mode == SolverMode::sequential ? dynamic_sequential_ : dynamic_.constraints,
+      kResidualChunk);
   std::vector<detail::ResidualPartial> partials(ranges.size());
   const ParticleArrays particles = ParticleArrays::of(state_);
   parallel_chunks(ranges.size(), 1, [&](std::size_t first, std::size_t last) {
     for (std::size_t k = first; k < last; ++k) {
       const auto& range = ranges[k];
-      partials[k] = range.jacobi
-                        ? detail::residual_of_range(range, schedule_.jacobi().constraints, particles)
-                        : detail::residual_of_range(range, schedule_.coloured(), particles);
+      const ConstraintSets& sets =
+          range.set == detail::ResidualRange::coloured ? schedule_.coloured()
+          : range.set == detail::ResidualRange::jacobi ? schedule_.jacobi().constraints
+          : settings_.mode == SolverMode::sequential   ? dynamic_sequential_
+                                                       : dynamic_.constraints;
+      partials[k] = detail::residual_of_range(range, sets, particles);
     }
   });
   return detail::combine_residual(ranges, partials);
@@ -401,6 +421,37 @@ Real Solver::lambda(ConstraintIndex constraint) const {
   else
     sets.coloured().for_each(read);
   return result;
+}
+
+void Solver::set_dynamic_constraints(ConstraintSets constraints) {
+  constraints.for_each([&](ConstraintFamily family, const auto& batch) {
+    std::size_t built_for = 0;
+    if constexpr (requires { batch.particles; })
+      built_for = batch.particles.particle_count;
+    else
+      built_for = batch.particle_count;
+    if (batch.size() != 0 && built_for > state_.size())
+      throw InvalidInput("dynamic " + std::string(family_name(family)) +
+                         " constraints were built for " + std::to_string(built_for) +
+                         " particles, the model has " + std::to_string(state_.size()));
+  });
+  dynamic_count_ = constraints.size();
+  if (settings_.mode == SolverMode::sequential) {
+    dynamic_sequential_ = std::move(constraints);  // the user's numbering is the solver's
+    return;
+  }
+  std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> all;
+  const auto sizes = constraints.sizes();
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+    all[f].resize(sizes[f]);
+    for (std::size_t i = 0; i < sizes[f]; ++i) all[f][i] = std::uint32_t(i);
+  }
+  dynamic_ = detail::build_jacobi_set(
+      constraints, all, state_.size(),
+      [&](ParticleIndex p) { return schedule_.scheduled_particle(p); },
+      [&](ParticleIndex scheduled) { return state_.inverse_mass[scheduled] > 0; },
+      schedule_.options());
+  dynamic_work_.bind(dynamic_);
 }
 
 }  // namespace tessera

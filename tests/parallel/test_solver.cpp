@@ -5,6 +5,7 @@
 // long run stays finite with bounded energy.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -273,6 +274,80 @@ TEST(Solver, RejectsBadSettingsAndArguments) {
   EXPECT_THROW(solver.set_velocity(99, Vector3r::Zero()), InvalidInput);
   EXPECT_THROW(solver.lambda(ConstraintIndex(model.constraints.size())), InvalidInput);
   EXPECT_THROW(solver.project(1, 0), InvalidInput);
+}
+
+/// A pinned 8×8 cloth plus three free particles that no model constraint touches.
+Model cloth_with_free_particles() {
+  Model model = test::cloth_model(8, 8);
+  std::vector<Vector3r> positions;
+  std::vector<Real> inverse_masses;
+  for (std::size_t p = 0; p < model.particles.size(); ++p) {
+    positions.push_back(model.particles.position(p));
+    inverse_masses.push_back(model.particles.inverse_mass[p]);
+  }
+  for (const Vector3r& p : {Vector3r(2, 0, 0), Vector3r(2.1, 0.05, 0), Vector3r(2.1, -0.05, 0.3)}) {
+    positions.push_back(p);
+    inverse_masses.push_back(1);
+  }
+  model.particles = ParticleState(positions, inverse_masses);
+  return model;
+}
+
+TEST(Solver, DynamicConstraintsAreProjectedEveryIterationAndCanBeReplaced) {
+  const Model model = cloth_with_free_particles();
+  const ParticleIndex point = 64, edge0 = 65, edge1 = 66;  // the free particles
+  const std::vector<ParticleIndex> triple = {point, edge0, edge1};
+  const Real thickness = Real(0.25);
+  const auto contact = make_edge_point_distance_constraints({triple, 67, thickness, {}});
+  const auto distance_to_edge = [&](const std::vector<Vector3r>& x) {
+    const Vector3r a = x[edge0], b = x[edge1];
+    const Real t = std::clamp((x[point] - a).dot(b - a) / (b - a).squaredNorm(), Real(0), Real(1));
+    return (x[point] - (a + t * (b - a))).norm();
+  };
+  for (const SolverMode mode : kModes) {
+    std::vector<Vector3r> reference;  // greedy keeps the numbering, metis renumbers
+    for (const char* strategy : {"greedy", "metis"}) {
+      if (mode == SolverMode::sequential && std::string(strategy) != "greedy") continue;
+      std::vector<Vector3r> result[2];
+      for (const std::size_t threads : {1, 2}) {
+        SCOPED_TRACE(name_of(mode) + " " + strategy + " threads " + std::to_string(threads));
+        SolverSettings settings;
+        settings.mode = mode;
+        settings.threads = threads;
+        ColouringOptions options;
+        options.locality = true;
+        Solver solver = make_solver(model, settings, strategy, options);
+        ConstraintSets dynamic;
+        dynamic.edge_point_distance = contact;
+        solver.set_dynamic_constraints(dynamic);
+        EXPECT_EQ(solver.dynamic_constraint_count(), 1u);
+        EXPECT_EQ(solver.residual().constraints, model.constraints.size() + 1);
+        solver.project(40, settings.time_step);
+        result[threads - 1] = solver.positions();
+        EXPECT_NEAR(distance_to_edge(result[threads - 1]), thickness, 1e-3);
+        EXPECT_EQ(solver.statistics().projections, 40u * (model.constraints.size() + 1));
+        // Removing them: the free particles stay where they are.
+        solver.set_dynamic_constraints({});
+        EXPECT_EQ(solver.residual().constraints, model.constraints.size());
+        solver.project(5, settings.time_step);
+        EXPECT_EQ(solver.position(point), result[threads - 1][point]);
+      }
+      EXPECT_TRUE(same_bits(result[0], result[1]));
+      if (reference.empty()) reference = result[0];
+      for (const ParticleIndex p : triple) {
+        EXPECT_LT((result[0][p] - reference[p]).norm(), 1e-5);
+      }
+    }
+  }
+}
+
+TEST(Solver, RejectsDynamicConstraintsForMoreParticlesThanTheModel) {
+  const Model model = test::cloth_model(4, 4);
+  Solver solver(model, test::colour_model(model), SolverSettings{});
+  const std::vector<ParticleIndex> triple = {0, 1, 20};
+  ConstraintSets dynamic;
+  dynamic.edge_point_distance = make_edge_point_distance_constraints({triple, 21, Real(0.1), {}});
+  EXPECT_THROW(solver.set_dynamic_constraints(dynamic), InvalidInput);
 }
 
 double energy(const Solver& solver, const Vector3r& gravity) {

@@ -47,7 +47,9 @@ struct SolverSettings {
   SolverMode mode = SolverMode::gs;
   /// Worker threads; 0 takes every hardware thread TBB reports.
   std::size_t threads = 0;
-  /// XPBD compliance (default) or PBD stiffness.
+  /// XPBD compliance (default) or PBD stiffness. Families without an XPBD form (the three
+  /// proximity families, strain, FEM triangle, shape matching) use their PBD stiffness in
+  /// either case.
   ConstraintSemantics semantics = ConstraintSemantics::compliance;
   /// Length of one step() and the substeps it is split into.
   Real time_step = Real(1) / Real(60);
@@ -137,6 +139,16 @@ class Solver {
   /// The XPBD multiplier of a constraint (global id); 0 for families without one.
   Real lambda(ConstraintIndex constraint) const;
 
+  /// Replaces the dynamic constraints — the ones made anew between steps, like collision
+  /// and contact constraints (the proximity families) — by `constraints`, which name
+  /// particles in the user's numbering; an empty ConstraintSets removes them. They are not
+  /// coloured: they form a Jacobi set of their own, projected after the model's constraints in
+  /// every iteration (mode sequential: one after another through the scalar API), reset with
+  /// the model's λ each step, and counted in residuals. Throws InvalidInput when a batch was
+  /// built for more particles than the model has.
+  void set_dynamic_constraints(ConstraintSets constraints);
+  std::size_t dynamic_constraint_count() const { return dynamic_count_; }
+
   /// The particles in the schedule's numbering, for code that works on the arrays.
   const ParticleState& scheduled_state() const { return state_; }
 
@@ -147,17 +159,25 @@ class Solver {
   void iterate(const ProjectionSettings& projection);
   void run_blocks(std::span<const ScheduleBlock> blocks, ParticleArrays particles,
                   ConstraintSets& sets, const ProjectionSettings& projection);
-  void jacobi_iteration(const ProjectionSettings& projection);
+  /// The corrected positions of a Jacobi set's incidences.
+  struct JacobiWork {
+    AlignedVector<Real> x, y, z;
+    void bind(const JacobiSet& jacobi);
+  };
+  void jacobi_iteration(JacobiSet& jacobi, JacobiWork& work, const ProjectionSettings& projection);
   template <class Body>
   void parallel_chunks(std::size_t count, std::size_t chunk, Body&& body);
 
   SolverSettings settings_;
   Schedule schedule_;
   ParticleState state_;
-  /// The Jacobi set's incidences: each slot's corrected position.
-  AlignedVector<Real> incidence_x_, incidence_y_, incidence_z_;
-  /// λ of each family of the Jacobi set (nullptr: none).
-  std::array<Real*, kConstraintFamilyCount> jacobi_lambda_{};
+  /// The schedule's Jacobi set, and the dynamic constraints' (mode sequential keeps the
+  /// dynamic constraints as given instead).
+  JacobiWork jacobi_work_;
+  JacobiSet dynamic_;
+  JacobiWork dynamic_work_;
+  ConstraintSets dynamic_sequential_;
+  std::size_t dynamic_count_ = 0;
   std::unique_ptr<tbb::task_arena> arena_;
   StepReport report_;
   SolverStatistics statistics_;

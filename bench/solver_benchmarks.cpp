@@ -1,7 +1,8 @@
 // Solver benchmarks: solver/<mode>/<scene>/threads:<T>, the throughput of whole projection
 // sweeps (items_per_second = constraint projections per second), and
-// solver_strategy/<strategy>/<scene>/threads:<T>, gs under each colouring strategy, which is
-// how the default strategy was chosen.
+// solver_strategy/<strategy>/<scene>/threads:<T>, gs under each colouring strategy (with
+// "+locality" the locality pass, "metis@<k>" METIS parts of k particles), which is how the
+// strategies and METIS's part size were compared on solver throughput.
 //
 // Scenes (each built once per process): cloth256 and cloth1024, 256² and 1024² cloths in the
 // xz plane pinned at two corners with distance + dihedral constraints; cloth256_distance,
@@ -56,6 +57,10 @@ const TimedColouring& colouring(const std::string& scene_name, const std::string
     if (const auto plus = name.find("+locality"); plus != std::string::npos) {
       options.locality = true;
       name.erase(plus);
+    }
+    if (const auto at = name.find('@'); at != std::string::npos) {  // metis@<particles per part>
+      options.particles_per_part = std::stoul(name.substr(at + 1));
+      name.erase(at);
     }
     ColouringRun run =
         run_colouring(ColouringRegistry::with_builtin_strategies().get(name), graph, options);
@@ -126,7 +131,8 @@ void register_benchmarks() {
       if (mode != SolverMode::sequential) b->Arg(2);
     }
   for (const char* strategy : {"greedy", "greedy+locality", "stencil", "stencil+locality",
-                               "dsatur", "random", "metis"})
+                               "dsatur", "random", "metis", "metis@1024", "metis@4096",
+                               "metis@16384"})
     for (const char* scene_name : {"cloth1024", "tetbar200k"}) {
       const std::string name = "solver_strategy/" + std::string(strategy) + "/" + scene_name;
       auto* b = benchmark::RegisterBenchmark(

@@ -67,6 +67,8 @@ class ParticleColourMasks {
     return taken;
   }
   std::size_t words() const { return words_; }
+  /// The raw sets (particle p's words at p * words()), for loops that specialise on one word.
+  std::uint64_t* data() { return bits_.data(); }
 
   bool is_free(std::span<const ParticleIndex> particles, Colour k) const {
     const std::uint64_t bit = std::uint64_t(1) << (k % 64);

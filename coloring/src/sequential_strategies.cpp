@@ -55,7 +55,30 @@ std::size_t first_fit_in_id_order(const ConstraintGraph& graph, ParticleColourMa
   constexpr std::size_t kPrefetchDistance = 16;
   const std::size_t count = graph.constraint_count();
   Colour largest = 0;
-  for (std::size_t c = 0; c < count; ++c) {
+  std::size_t c = 0;
+  // While 64 colours suffice (one word per particle), a loop over the raw CSR arrays: in
+  // input order consecutive constraints share particles, so each first-fit waits for the
+  // previous one's store; keeping that chain to load, OR, count, shift, OR, store is what
+  // makes it fast (the general loop below recomputed word offsets and spans around it).
+  if (masks.words() == 1) {
+    std::uint64_t* bits = masks.data();
+    const std::uint32_t* offsets = graph.constraint_offsets().data();
+    const ParticleIndex* particles = graph.constraint_particles().data();
+    for (; c < count; ++c) {
+      const std::uint32_t begin = offsets[c], end = offsets[c + 1];
+      if (c + kPrefetchDistance < count)
+        __builtin_prefetch(&bits[particles[offsets[c + kPrefetchDistance]]]);
+      std::uint64_t taken = 0;
+      for (std::uint32_t j = begin; j < end; ++j) taken |= bits[particles[j]];
+      if (taken == ~std::uint64_t(0)) break;  // a 65th colour: the general loop grows the sets
+      const Colour k = static_cast<Colour>(std::countr_one(taken));
+      const std::uint64_t bit = std::uint64_t(1) << k;
+      for (std::uint32_t j = begin; j < end; ++j) bits[particles[j]] |= bit;
+      colours[c] = k;
+      largest = std::max(largest, k);
+    }
+  }
+  for (; c < count; ++c) {
     if (c + kPrefetchDistance < count)
       masks.prefetch(graph.particles_of(static_cast<ConstraintIndex>(c + kPrefetchDistance)));
     const auto particles = graph.particles_of(static_cast<ConstraintIndex>(c));

@@ -142,6 +142,42 @@ TEST(KnownOptima, IteratedGreedyReachesTheBoundOnTheClothWhateverTheOrder) {
   EXPECT_EQ(colouring.colour_count(), 6u);
 }
 
+/// The plain first-fit the greedy strategy must reproduce: each constraint in id order takes
+/// the smallest colour none of its neighbours (constraints sharing a movable particle) has.
+std::vector<Colour> reference_first_fit(const ConstraintGraph& graph) {
+  std::vector<Colour> colours(graph.constraint_count(), 0);
+  for (ConstraintIndex c = 0; c < graph.constraint_count(); ++c) {
+    std::set<Colour> taken;
+    for (const ParticleIndex p : graph.particles_of(c))
+      for (const ConstraintIndex n : graph.constraints_of(p))
+        if (n < c) taken.insert(colours[n]);
+    Colour k = 0;
+    while (taken.count(k)) ++k;
+    colours[c] = k;
+  }
+  return colours;
+}
+
+TEST(GreedyStrategy, IsExactlyFirstFitInInputOrderAlsoPast64Colours) {
+  // A star of 100 edges at one hub needs 100 colours: the one-word fast path hands over to
+  // the general loop at the 65th.
+  std::vector<ParticleIndex> star;
+  for (ParticleIndex arm = 1; arm <= 100; ++arm) star.insert(star.end(), {0, arm});
+  const std::vector<Real> star_masses(101, Real(1));
+  const std::vector<ConstraintGroup> star_groups = {ConstraintGroup::fixed_arity("star", 2, star)};
+  std::vector<ConstraintGraph> graphs;
+  graphs.push_back(ConstraintGraph(star_masses, star_groups));
+  graphs.push_back(test::cloth_graph(30, 20, true));
+  graphs.push_back(test::tet_bar_graph(3, 4, 5));
+  for (const ConstraintGraph& graph : graphs) {
+    const Colouring greedy = registry().get("greedy").colour(graph, {});
+    const auto expected = reference_first_fit(graph);
+    ASSERT_TRUE(std::equal(expected.begin(), expected.end(), greedy.colours().begin(),
+                           greedy.colours().end()));
+  }
+  EXPECT_EQ(registry().get("greedy").colour(graphs[0], {}).colour_count(), 100u);
+}
+
 /// The cloth's distance and bending constraints with both groups shuffled (seeded).
 ConstraintGraph shuffled_cloth_with_bending(std::size_t columns, std::size_t rows, unsigned seed,
                                             std::vector<ParticleIndex>& edges,

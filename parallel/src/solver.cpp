@@ -248,13 +248,50 @@ void Solver::iterate(const ProjectionSettings& projection) {
   jacobi_iteration(dynamic_, dynamic_work_, projection);
 }
 
+void Solver::save_state() {
+  if (!settings_.check_finite) return;
+  AlignedVector<Real>* arrays[6] = {&state_.x, &state_.y, &state_.z,
+                                    &state_.velocity_x, &state_.velocity_y, &state_.velocity_z};
+  for (std::size_t a = 0; a < 6; ++a) saved_[a].assign(arrays[a]->begin(), arrays[a]->end());
+}
+
+void Solver::restore_if_not_finite(const char* operation) {
+  if (!settings_.check_finite) return;
+  AlignedVector<Real>* arrays[6] = {&state_.x, &state_.y, &state_.z,
+                                    &state_.velocity_x, &state_.velocity_y, &state_.velocity_z};
+  // The first non-finite particle of each chunk, then the first overall (deterministic).
+  const std::size_t n = state_.size();
+  const std::size_t chunks = (n + kParticleChunk - 1) / kParticleChunk;
+  std::vector<std::size_t> first_bad(chunks, n);
+  parallel_chunks(n, kParticleChunk, [&](std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) {
+      Real sum = 0;  // finite iff every term is (x - x is 0 only for finite x)
+      for (const AlignedVector<Real>* a : arrays) sum += (*a)[i] - (*a)[i];
+      if (sum != 0 || sum != sum) {
+        first_bad[first / kParticleChunk] = i;
+        return;
+      }
+    }
+  });
+  const auto bad = std::min_element(first_bad.begin(), first_bad.end());
+  if (bad == first_bad.end() || *bad == n) return;
+  const ParticleIndex particle = schedule_.user_particle(ParticleIndex(*bad));
+  for (std::size_t a = 0; a < 6; ++a) std::copy(saved_[a].begin(), saved_[a].end(), arrays[a]->begin());
+  throw NumericalFailure(std::string("solver: ") + operation + " made particle " +
+                         std::to_string(particle) +
+                         " non-finite; positions and velocities are restored to before it "
+                         "(check the time step, compliance and velocities)");
+}
+
 void Solver::project(std::size_t iterations, Real dt) {
   if (!(std::isfinite(dt) && dt > 0))
     throw InvalidInput("solver: projection time step must be positive and finite (got " +
                        std::to_string(dt) + ")");
   const ProjectionSettings projection{settings_.semantics, dt};
   const auto start = Clock::now();
+  save_state();
   for (std::size_t it = 0; it < iterations; ++it) iterate(projection);
+  restore_if_not_finite("a projection");
   statistics_.seconds_projection += seconds_since(start);
   statistics_.projections +=
       std::uint64_t(iterations) * (statistics_.constraints + dynamic_count_);
@@ -310,6 +347,7 @@ void Solver::step() {
   const Real h = settings_.time_step / Real(settings_.substeps);
   const ProjectionSettings projection{settings_.semantics, h};
   report_.history.clear();
+  save_state();
   for (std::size_t substep = 0; substep < settings_.substeps; ++substep) {
     const bool last = substep + 1 == settings_.substeps;
     integrate(h);
@@ -331,6 +369,7 @@ void Solver::step() {
     update_velocities(h);
     if (last && settings_.report_residuals) report_.residual_after = residual();
   }
+  restore_if_not_finite(("step " + std::to_string(statistics_.steps + 1)).c_str());
   ++statistics_.steps;
   statistics_.seconds_stepping += seconds_since(start);
 }

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -348,6 +349,27 @@ TEST(Solver, RejectsDynamicConstraintsForMoreParticlesThanTheModel) {
   ConstraintSets dynamic;
   dynamic.edge_point_distance = make_edge_point_distance_constraints({triple, 21, Real(0.1), {}});
   EXPECT_THROW(solver.set_dynamic_constraints(dynamic), InvalidInput);
+}
+
+TEST(Solver, AStepThatOverflowsIsUndoneAndReported) {
+  // A time step so long that h² g overflows: the first step must throw and leave every
+  // position and velocity exactly as before, in every mode.
+  const Model model = test::cloth_model(6, 6);
+  for (const SolverMode mode : kModes) {
+    SCOPED_TRACE(name_of(mode));
+    SolverSettings settings;
+    settings.mode = mode;
+    settings.time_step = Real(10) * std::sqrt(std::numeric_limits<Real>::max());
+    Solver solver = make_solver(model, settings);
+    const auto before = solver.positions();
+    EXPECT_THROW(solver.step(), NumericalFailure);
+    EXPECT_TRUE(same_bits(solver.positions(), before));
+    for (const Vector3r& v : solver.velocities()) EXPECT_EQ(v, Vector3r::Zero());
+    EXPECT_EQ(solver.statistics().steps, 0u);
+    // A finite projection still works afterwards.
+    solver.project(2, Real(0.01));
+    for (const Vector3r& p : solver.positions()) EXPECT_TRUE(p.allFinite());
+  }
 }
 
 double energy(const Solver& solver, const Vector3r& gravity) {

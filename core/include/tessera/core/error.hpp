@@ -1,4 +1,5 @@
-// The one exception type of Tessera's API.
+// The exception types of Tessera's API: bad input, and a computation that left the finite
+// numbers (reported, with the state restored, instead of silently written).
 #pragma once
 
 #include <stdexcept>
@@ -13,6 +14,15 @@ namespace tessera {
 class InvalidInput : public std::invalid_argument {
  public:
   explicit InvalidInput(const std::string& message) : std::invalid_argument(message) {}
+};
+
+/// Thrown when a step or projection produced a non-finite position or velocity from finite
+/// input (extreme parameters: a velocity or compliance that overflows). The operation is
+/// undone: the state is the one from before it, so the caller can change the parameters and
+/// go on. The message names the particle.
+class NumericalFailure : public std::runtime_error {
+ public:
+  explicit NumericalFailure(const std::string& message) : std::runtime_error(message) {}
 };
 
 }  // namespace tessera

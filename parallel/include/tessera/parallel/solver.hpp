@@ -71,6 +71,10 @@ struct SolverSettings {
   bool report_residuals = true;
   /// Also the residual after every iteration of the last substep (convergence history).
   bool record_convergence = false;
+  /// Check after every step() and project() that every position and velocity is finite; if
+  /// one is not, restore the state from before and throw NumericalFailure. Costs a copy and
+  /// a scan of the particle arrays per call (not per iteration).
+  bool check_finite = true;
 };
 
 /// What the last step() measured.
@@ -113,7 +117,8 @@ class Solver {
   Solver(Solver&&) noexcept;
   Solver& operator=(Solver&&) noexcept;
 
-  /// One time step of settings().time_step, in settings().substeps substeps.
+  /// One time step of settings().time_step, in settings().substeps substeps. Throws
+  /// NumericalFailure (state restored) if it produced a non-finite value (check_finite).
   void step();
   /// `iterations` projection sweeps at the current positions, with no time integration
   /// (λ kept from before; call reset_lambdas() first for a fresh XPBD solve). For tests,
@@ -157,6 +162,9 @@ class Solver {
 
  private:
   void check_particle(ParticleIndex particle) const;
+  /// check_finite: snapshot before an operation, and the scan after it (restores and throws).
+  void save_state();
+  void restore_if_not_finite(const char* operation);
   void integrate(Real h);
   void update_velocities(Real h);
   void iterate(const ProjectionSettings& projection);
@@ -181,6 +189,9 @@ class Solver {
   JacobiWork dynamic_work_;
   ConstraintSets dynamic_sequential_;
   std::size_t dynamic_count_ = 0;
+  /// Positions and velocities from before the current step() or project() (check_finite),
+  /// and the λ arrays are not restored (they are reset at the next step).
+  std::array<AlignedVector<Real>, 6> saved_;
   std::unique_ptr<tbb::task_arena> arena_;
   StepReport report_;
   SolverStatistics statistics_;

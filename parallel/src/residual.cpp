@@ -37,10 +37,13 @@ std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
 ResidualPartial residual_of_range(const ResidualRange& range, const ConstraintSets& sets,
                                   const ParticleArrays& particles) {
   ResidualPartial partial;
+  Real values[kLongestResidualRange];
   sets.for_each([&](ConstraintFamily family, const auto& batch) {
     if (family != range.family) return;
-    for (std::size_t c = range.begin; c < range.end; ++c) {
-      const double r = double(constraint_residual(particles, batch, c));
+    // The batched evaluation (SIMD lanes), then the sums in constraint order.
+    constraint_residuals(particles, batch, range.begin, range.end, values);
+    for (std::size_t c = 0; c < std::size_t(range.end - range.begin); ++c) {
+      const double r = double(values[c]);
       partial.sum_of_squares += r * r;
       partial.max = std::max(partial.max, r);
     }

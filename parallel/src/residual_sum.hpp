@@ -28,8 +28,11 @@ struct ResidualPartial {
   double max = 0;
 };
 
+/// The longest range residual_of_range takes (its values live on the stack).
+inline constexpr std::size_t kLongestResidualRange = 2048;
+
 /// Every real constraint of the schedule and of `dynamic`, in ranges of at most `chunk`
-/// constraints.
+/// (≤ kLongestResidualRange) constraints.
 std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
                                            const ConstraintSets& dynamic, std::size_t chunk);
 

@@ -30,7 +30,7 @@ namespace {
 /// Particles (or incidences) per parallel chunk of the element-wise loops.
 constexpr std::size_t kParticleChunk = 4096;
 /// Constraints per chunk of the residual sums.
-constexpr std::size_t kResidualChunk = 2048;
+constexpr std::size_t kResidualChunk = detail::kLongestResidualRange;
 
 using Clock = std::chrono::steady_clock;
 

@@ -5,10 +5,15 @@
 // point, a line or a plane.
 #include <tessera/core/constraint_residual.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
+#include <numeric>
 #include <vector>
 
+#include "batch_test_support.hpp"
 #include "test_support.hpp"
 
 namespace tessera {
@@ -578,6 +583,321 @@ TEST(ParticleTetContactResidual, RigidInvariantWithTheNormal) {
     moved.positions = rigidly_moved(scene.positions, R, random.vector(-5, 5));
     moved.normals[0] = R * scene.normals[0];
     EXPECT_NEAR(residual(build(moved), moved.positions), reference, test::kRoundOff);
+  }
+}
+
+// ------------------------------------------------------------------ batched: constraint_residuals
+// constraint_residuals over a range agrees with constraint_residual constraint by constraint,
+// on every SIMD target, and writes out[0, end − begin) and nothing else.
+
+constexpr std::size_t kBatchedCount = 101;
+
+/// The rest stencil of one N-particle constraint: a unit simplex (plus a fifth point inside
+/// for contacts) with noise, translated; never degenerate. Not rotated, so the strain
+/// triangle's xy-plane rest convention stays well-conditioned.
+template <int N>
+std::array<Vector3r, N> rest_stencil(Random& random) {
+  static const Vector3r base[5] = {Vector3r(0, 0, 0), Vector3r(1, 0, 0), Vector3r(0, 1, 0),
+                                   Vector3r(0, 0, 1), Vector3r(Real(0.3), Real(0.3), Real(0.3))};
+  const Vector3r shift = random.vector(-5, 5);
+  std::array<Vector3r, N> p;
+  for (std::size_t k = 0; k < std::size_t(N); ++k)
+    p[k] = base[k] + Real(0.15) * random.vector() + shift;
+  return p;
+}
+
+/// A current configuration of a stencil: mostly a random affine map plus noise, sometimes
+/// the rest shape, a rigid motion, one point, points on a line, points in a plane.
+/// I + 0.4 B with B uniform in [−1, 1]³ˣ³ (drawn from `random`, so a scene is reproducible).
+Matrix3r random_deformation(Random& random) {
+  Matrix3r B;
+  B << random.vector(), random.vector(), random.vector();
+  return Matrix3r::Identity() + Real(0.4) * B;
+}
+
+enum class Deformation { rest, rigid, point, line, plane, general };
+
+template <std::size_t N>
+Deformation deform_stencil(Random& random, std::array<Vector3r, N>& p) {
+  const int mode = random.integer(0, 9);
+  const Vector3r origin = p[0];
+  if (mode == 0) return Deformation::rest;
+  if (mode == 1) {        // rigid motion
+    const Matrix3r R = random.rotation();
+    const Vector3r t = random.vector();
+    for (Vector3r& x : p) x = R * (x - origin) + origin + t;
+    return Deformation::rigid;
+  }
+  if (mode == 2) {
+    const Vector3r at = origin + random.vector();
+    for (Vector3r& x : p) x = at;
+    return Deformation::point;
+  }
+  if (mode == 3) {
+    const Vector3r direction = random.unit_vector();
+    for (Vector3r& x : p) x = origin + random.uniform(-1, 1) * direction;
+    return Deformation::line;
+  }
+  if (mode == 4) {
+    for (Vector3r& x : p) x.z() = origin.z();
+    return Deformation::plane;
+  }
+  const Matrix3r A = random_deformation(random);
+  for (Vector3r& x : p) x = A * (x - origin) + origin + Real(0.1) * random.vector();
+  return Deformation::general;
+}
+
+/// A batch of kBatchedCount N-particle constraints on a randomly numbered particle set: the
+/// rest stencils, the indices (N per constraint) and the deformed current positions.
+template <int N>
+struct BatchedScene {
+  std::vector<Vector3r> rest;
+  std::vector<Vector3r> current;
+  std::vector<ParticleIndex> indices;
+  std::vector<Deformation> deformation;  // per constraint
+};
+
+template <int N>
+BatchedScene<N> batched_scene(Random& random) {
+  BatchedScene<N> scene;
+  const std::size_t particle_count = kBatchedCount * N;
+  std::vector<ParticleIndex> permutation(particle_count);
+  std::iota(permutation.begin(), permutation.end(), ParticleIndex(0));
+  for (std::size_t i = particle_count - 1; i > 0; --i)
+    std::swap(permutation[i], permutation[std::size_t(random.integer(0, int(i)))]);
+  scene.rest.assign(particle_count, Vector3r::Zero());
+  scene.current.assign(particle_count, Vector3r::Zero());
+  for (std::size_t c = 0; c < kBatchedCount; ++c) {
+    const std::array<Vector3r, N> rest = rest_stencil<N>(random);
+    std::array<Vector3r, N> current = rest;
+    scene.deformation.push_back(deform_stencil(random, current));
+    for (std::size_t k = 0; k < std::size_t(N); ++k) {
+      const ParticleIndex index = permutation[c * N + k];
+      scene.indices.push_back(index);
+      scene.rest[index] = rest[k];
+      scene.current[index] = current[k];
+    }
+  }
+  return scene;
+}
+
+/// Checks constraint_residuals of `batch` at `current` over [0, size) and random sub-ranges
+/// (empty, shorter than a vector, unaligned) on every SIMD target against the scalar function.
+/// line_bound > 0: the family's value on points on a line is ill-conditioned (the dihedral
+/// angle between two wing normals made of round-off), so there the batched value is only
+/// checked to be finite and in [0, line_bound].
+template <class Batch>
+void expect_batched_residuals_match(const Batch& batch, const std::vector<Vector3r>& current,
+                                    Random& random,
+                                    const std::vector<Deformation>& deformations,
+                                    Real line_bound = 0) {
+  ParticleState state(current, unit_masses(current.size()));
+  const ParticleArrays particles = ParticleArrays::of(state);
+  const std::size_t n = batch.size();
+  std::vector<Real> scalar(n);
+  for (std::size_t c = 0; c < n; ++c) {
+    scalar[c] = constraint_residual(particles, batch, c);
+    ASSERT_TRUE(std::isfinite(scalar[c])) << "constraint " << c;
+  }
+  std::vector<std::array<std::size_t, 2>> ranges = {{0, n}, {0, 0}, {n, n}, {n - 1, n}};
+  for (int r = 0; r < 8; ++r) {
+    const std::size_t a = std::size_t(random.integer(0, int(n)));
+    const std::size_t b = std::size_t(random.integer(0, int(n)));
+    ranges.push_back({std::min(a, b), std::max(a, b)});
+  }
+  const std::size_t short_begin = std::size_t(random.integer(0, int(n) - 3));
+  ranges.push_back({short_begin, short_begin + 3});
+  constexpr Real kSentinel = Real(-12345.5);
+  test::for_each_simd_target([&](const std::string&) {
+    for (const auto& [begin, end] : ranges) {
+      SCOPED_TRACE("range [" + std::to_string(begin) + ", " + std::to_string(end) + ")");
+      // out[0, kMaxLanes) and everything past the range's end are guards.
+      std::vector<Real> out(n + 2 * kMaxLanes, kSentinel);
+      constraint_residuals(particles, batch, begin, end, out.data() + kMaxLanes);
+      for (std::size_t k = 0; k < out.size(); ++k) {
+        const bool inside = k >= kMaxLanes && k < kMaxLanes + (end - begin);
+        if (!inside) {
+          ASSERT_EQ(out[k], kSentinel) << "written outside the range at " << k;
+          continue;
+        }
+        const std::size_t c = begin + k - kMaxLanes;
+        if (line_bound > 0 && deformations[c] == Deformation::line) {
+          ASSERT_TRUE(std::isfinite(out[k]) && out[k] >= 0 && out[k] <= line_bound)
+              << "constraint " << c << " reads " << out[k];
+          continue;
+        }
+        const Real expected = scalar[c];
+        ASSERT_NEAR(out[k], expected,
+                    test::kBatchTolerance * std::max(Real(1), std::abs(expected)))
+            << "constraint " << c << " deformation " << int(deformations[c]);
+      }
+    }
+  });
+}
+
+/// Builds batches of N-particle constraints with build(indices, rest, random) on a few random
+/// scenes and checks each.
+template <int N, class Build>
+void expect_batched_family(unsigned seed, Build&& build, Real line_bound = 0) {
+  for (unsigned scene_number = 0; scene_number < 4; ++scene_number) {
+    SCOPED_TRACE("scene " + std::to_string(scene_number));
+    Random random(seed + 1000 * scene_number);
+    const BatchedScene<N> scene = batched_scene<N>(random);
+    const auto batch = build(scene.indices, scene.rest, random);
+    ASSERT_EQ(batch.size(), kBatchedCount);
+    expect_batched_residuals_match(batch, scene.current, random, scene.deformation, line_bound);
+  }
+}
+
+using Indices = std::vector<ParticleIndex>;
+using Points = std::vector<Vector3r>;
+
+TEST(BatchedResiduals, Distance) {
+  expect_batched_family<2>(101, [](const Indices& i, const Points& rest, Random&) {
+    return make_distance_constraints({i, rest});
+  });
+}
+
+TEST(BatchedResiduals, Dihedral) {
+  // On a line the wing normals are round-off: the angle is finite and ≤ π, nothing more.
+  expect_batched_family<4>(
+      102,
+      [](const Indices& i, const Points& rest, Random&) {
+        return make_dihedral_constraints({i, rest});
+      },
+      std::numbers::pi_v<Real>);
+}
+
+TEST(BatchedResiduals, Volume) {
+  expect_batched_family<4>(103, [](const Indices& i, const Points& rest, Random&) {
+    return make_volume_constraints({i, rest});
+  });
+}
+
+TEST(BatchedResiduals, IsometricBending) {
+  expect_batched_family<4>(104, [](const Indices& i, const Points& rest, Random&) {
+    return make_isometric_bending_constraints({i, rest});
+  });
+}
+
+/// Proximity constraints with random rest distances, a fifth of them 0.
+ProximityDistanceConstraintInput batched_proximity_input(const Indices& i, const Points& rest,
+                                                         Random& random,
+                                                         std::vector<Real>& rest_distances,
+                                                         std::size_t particles_per_constraint) {
+  rest_distances.clear();
+  for (std::size_t c = 0; c < i.size() / particles_per_constraint; ++c)
+    rest_distances.push_back(random.uniform(0, 1) < Real(0.2) ? Real(0)
+                                                              : random.uniform(Real(0.05), 1));
+  ProximityDistanceConstraintInput input;
+  input.particles = i;
+  input.particle_count = rest.size();
+  input.rest_distances = rest_distances;
+  return input;
+}
+
+TEST(BatchedResiduals, EdgePointDistance) {
+  expect_batched_family<3>(105, [](const Indices& i, const Points& rest, Random& random) {
+    std::vector<Real> d;
+    return make_edge_point_distance_constraints(batched_proximity_input(i, rest, random, d, 3));
+  });
+}
+
+TEST(BatchedResiduals, TrianglePointDistance) {
+  expect_batched_family<4>(106, [](const Indices& i, const Points& rest, Random& random) {
+    std::vector<Real> d;
+    return make_triangle_point_distance_constraints(
+        batched_proximity_input(i, rest, random, d, 4));
+  });
+}
+
+TEST(BatchedResiduals, EdgeEdgeDistance) {
+  expect_batched_family<4>(107, [](const Indices& i, const Points& rest, Random& random) {
+    std::vector<Real> d;
+    return make_edge_edge_distance_constraints(batched_proximity_input(i, rest, random, d, 4));
+  });
+}
+
+TEST(BatchedResiduals, StrainTriangle) {
+  expect_batched_family<3>(108, [](const Indices& i, const Points& rest, Random&) {
+    return make_strain_triangle_constraints({i, rest});
+  });
+}
+
+TEST(BatchedResiduals, StrainTetra) {
+  expect_batched_family<4>(109, [](const Indices& i, const Points& rest, Random&) {
+    return make_strain_tetra_constraints({i, rest});
+  });
+}
+
+TEST(BatchedResiduals, FEMTriangle) {
+  expect_batched_family<3>(110, [](const Indices& i, const Points& rest, Random&) {
+    return make_fem_triangle_constraints({i, rest});
+  });
+}
+
+TEST(BatchedResiduals, FEMTetra) {
+  for (const bool handle_inversion : {false, true})
+    expect_batched_family<4>(111, [&](const Indices& i, const Points& rest, Random&) {
+      FEMTetraConstraintInput input{i, rest};
+      input.handle_inversion = handle_inversion;
+      return make_fem_tetra_constraints(input);
+    });
+}
+
+TEST(BatchedResiduals, ParticleTetContact) {
+  Random random(112);
+  const BatchedScene<5> scene = batched_scene<5>(random);
+  std::vector<Vector3r> barycentric, normals;
+  for (std::size_t c = 0; c < kBatchedCount; ++c) {
+    const Real b1 = random.uniform(0, 1), b2 = random.uniform(0, 1 - b1);
+    barycentric.push_back(Vector3r(b1, b2, random.uniform(0, 1 - b1 - b2)));
+    normals.push_back(random.unit_vector());
+  }
+  const ParticleState rest_state(scene.rest, unit_masses(scene.rest.size()));
+  const ParticleTetContacts contacts =
+      make_particle_tet_contacts({scene.indices, barycentric, normals}, rest_state);
+  // The contact particle (slot 0) moved anywhere near its tet: about half penetrate.
+  std::vector<Vector3r> current = scene.current;
+  for (std::size_t c = 0; c < kBatchedCount; ++c)
+    current[scene.indices[5 * c]] = current[scene.indices[5 * c + 1]] + random.vector();
+  expect_batched_residuals_match(contacts, current, random, scene.deformation);
+}
+
+TEST(BatchedResiduals, ShapeMatching) {
+  // Clusters of 4 to 12 particles over a random numbering, rigid and stretchy.
+  Random random(113);
+  std::vector<std::uint32_t> offsets = {0};
+  for (std::size_t c = 0; c < kBatchedCount; ++c)
+    offsets.push_back(offsets.back() + std::uint32_t(random.integer(4, 12)));
+  const std::size_t particle_count = offsets.back();
+  std::vector<ParticleIndex> particles(particle_count);
+  std::iota(particles.begin(), particles.end(), ParticleIndex(0));
+  for (std::size_t i = particle_count - 1; i > 0; --i)
+    std::swap(particles[i], particles[std::size_t(random.integer(0, int(i)))]);
+  std::vector<Vector3r> rest(particle_count), current(particle_count);
+  std::vector<Deformation> deformations;
+  for (std::size_t c = 0; c < kBatchedCount; ++c) {
+    deformations.push_back(c % 7 == 3 ? Deformation::point : Deformation::general);
+    const Matrix3r A = random_deformation(random);
+    const Vector3r centre = random.vector(-5, 5);
+    for (std::size_t e = offsets[c]; e < offsets[c + 1]; ++e) {
+      // The first four entries a noisy unit simplex, so no rest cluster is flat.
+      const std::size_t k = e - offsets[c];
+      const Vector3r corner =
+          k == 0 || k >= 4 ? Vector3r(Vector3r::Zero())
+                           : Vector3r(Vector3r::Unit(Eigen::Index(k - 1)));
+      rest[particles[e]] =
+          centre + (k < 4 ? corner + Real(0.1) * random.vector() : random.vector());
+      current[particles[e]] = c % 7 == 3 ? centre : A * (rest[particles[e]] - centre) + centre;
+    }
+  }
+  const std::vector<Real> inverse_masses(particle_count, Real(1));
+  for (const bool allow_stretch : {false, true}) {
+    ShapeMatchingInput input{offsets, particles, rest, inverse_masses};
+    input.allow_stretch = allow_stretch;
+    expect_batched_residuals_match(make_shape_matching_constraints(input), current, random,
+                                   deformations);
   }
 }
 

@@ -127,4 +127,46 @@ Real constraint_residual(const ParticleArrays& particles, const ShapeMatchingCon
 Real constraint_residual(const ParticleArrays& particles, const ParticleTetContacts& batch,
                          std::size_t c);
 
+// ------------------------------------------------------------------------------ batched
+// constraint_residuals(particles, batch, begin, end, out): constraint_residual of constraints
+// [begin, end), W at a time on the active SIMD target (the family's lane formula instantiated
+// on Highway vectors, as the batched projection kernels run it), written to out[c − begin]
+// for each c. Same values as the one-constraint function up to rounding (FMA contraction and
+// the vector math functions round differently). Nothing outside out[0, end − begin) is
+// written. Shape matching (clusters of any size) evaluates its clusters one at a time.
+// Preconditions (not checked): begin ≤ end ≤ batch.size(), as for constraint_residual.
+
+void constraint_residuals(const ParticleArrays& particles, const DistanceConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles, const DihedralConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles, const VolumeConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles,
+                          const IsometricBendingConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles,
+                          const EdgePointDistanceConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles,
+                          const TrianglePointDistanceConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles,
+                          const EdgeEdgeDistanceConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles,
+                          const StrainTriangleConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles, const StrainTetraConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles, const FEMTriangleConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles, const FEMTetraConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles,
+                          const ShapeMatchingConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out);
+void constraint_residuals(const ParticleArrays& particles, const ParticleTetContacts& batch,
+                          std::size_t begin, std::size_t end, Real* out);
+
 }  // namespace tessera

@@ -52,7 +52,7 @@ const TimedColouring& colouring(const std::string& scene_name, const std::string
   static std::map<std::string, std::unique_ptr<TimedColouring>> cache;
   auto& slot = cache[scene_name + "/" + strategy];
   if (!slot) {
-    const ConstraintGraph graph = scene(scene_name).constraint_graph();
+    const ConstraintGraph graph = constraint_graph(scene(scene_name));
     ColouringOptions options;
     std::string name = strategy;
     if (const auto plus = name.find("+locality"); plus != std::string::npos) {

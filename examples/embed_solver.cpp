@@ -57,7 +57,7 @@ int main() {
   // particles internally, which the solver hides: everything below is in our numbering.
   const ColouringRun run =
       run_colouring(ColouringRegistry::with_builtin_strategies().get("stencil"),
-                    model.constraint_graph(), ColouringOptions{.locality = true});
+                    constraint_graph(model), ColouringOptions{.locality = true});
 
   // Two seconds: 120 steps of 1/60 s, each 4 substeps of 10 Gauss-Seidel sweeps, damped so
   // the cloth settles hanging from its pinned corners. The solver runs in its own task arena

@@ -184,7 +184,7 @@ TEST(Schedule, LocalityRenumberingMapsBackToTheUsersParticles) {
   const Model model = test::cloth_model(20, 20);
   ColouringOptions options;
   options.locality = true;
-  const ConstraintGraph graph = model.constraint_graph();
+  const ConstraintGraph graph = constraint_graph(model);
   const ColouringRun run = run_colouring(
       ColouringRegistry::with_builtin_strategies().get("greedy"), graph, options);
   ASSERT_TRUE(run.colouring.renumbers_particles());
@@ -205,7 +205,7 @@ TEST(Schedule, JacobiSetGivesEveryConstraintPrivateIncidences) {
     check_layout(c.model, colouring, schedule);
     // Each movable particle's incidence list has one entry per constraint touching it, and
     // each of them names that particle.
-    const ConstraintGraph graph = c.model.constraint_graph();
+    const ConstraintGraph graph = constraint_graph(c.model);
     const JacobiSet& jacobi = schedule.jacobi();
     std::size_t listed = 0;
     for (std::size_t k = 0; k < jacobi.particles.size(); ++k) {

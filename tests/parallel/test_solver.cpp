@@ -33,7 +33,7 @@ std::string name_of(SolverMode mode) { return std::string(solver_mode_name(mode)
 Solver make_solver(const Model& model, SolverSettings settings, const char* strategy = "greedy",
                    ColouringOptions options = {}) {
   if (settings.mode == SolverMode::sequential) return Solver(model, settings);
-  const ConstraintGraph graph = model.constraint_graph();
+  const ConstraintGraph graph = constraint_graph(model);
   return Solver(model,
                 run_colouring(ColouringRegistry::with_builtin_strategies().get(strategy), graph,
                               options)

@@ -61,7 +61,7 @@ inline Model tet_bar_model(std::size_t x, std::size_t y, std::size_t z,
 /// The colouring of a model by a built-in strategy.
 inline Colouring colour_model(const Model& model, const char* strategy = "greedy",
                               ColouringOptions options = {}) {
-  const ConstraintGraph graph = model.constraint_graph();
+  const ConstraintGraph graph = constraint_graph(model);
   return ColouringRegistry::with_builtin_strategies().get(strategy).colour(graph, options);
 }
 

@@ -113,7 +113,7 @@ struct JacobiSet {
 class Schedule {
  public:
   Schedule() = default;
-  /// Lays out `model`'s constraints. colouring must colour model.constraint_graph() (same
+  /// Lays out `model`'s constraints. colouring must colour constraint_graph(model) (same
   /// constraint count; InvalidInput otherwise) unless options.mode is sequential, where it is
   /// ignored and may be null.
   Schedule(const Model& model, const Colouring* colouring, const ScheduleOptions& options);

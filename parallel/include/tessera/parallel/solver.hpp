@@ -107,7 +107,7 @@ struct SolverStatistics {
 class Solver {
  public:
   /// Builds the schedule of `model` from `colouring` (which must colour
-  /// model.constraint_graph()). Mode sequential ignores the colouring. Throws InvalidInput
+  /// constraint_graph(model)). Mode sequential ignores the colouring. Throws InvalidInput
   /// for bad settings (time step ≤ 0 or not finite, 0 substeps, damping < 0, ω outside
   /// (0, 2), block size 0) or a colouring that does not fit the model.
   Solver(Model model, const Colouring& colouring, const SolverSettings& settings);

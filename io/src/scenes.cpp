@@ -1,0 +1,430 @@
+// Scenes: shells, solids, the default cloth and bar, and read meshes as Models.
+//
+// Each builder validates what core does not see (options, pins, element lists as a whole),
+// then lets core's make_<family>_constraints validate the constraints themselves, re-throwing
+// their InvalidInput with the name of what was being built in front. Strain triangles take
+// their rest shape in the xy plane, which a mesh in space does not have: each triangle is
+// laid into its own plane (x along p0 → p1) in a scratch array of 3 points per triangle, the
+// batch is built against that array, and its particle indices are then pointed back at the
+// mesh's vertices (validated here beforehand, as core would have).
+#include <tessera/io/scenes.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <utility>
+
+#include <tessera/core/error.hpp>
+
+namespace tessera::io {
+namespace {
+
+/// A value as the messages print it ("-1", "0.5", "nan", "inf").
+std::string number(Real value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+void require_vertex_count_fits(const std::string& context, std::size_t vertex_count) {
+  if (vertex_count > std::numeric_limits<VertexIndex>::max())
+    throw InvalidInput(context + ": " + std::to_string(vertex_count) +
+                       " vertices do not fit a 32-bit vertex index");
+}
+
+/// Checks an element list: a whole number of elements, indices in range, none repeated
+/// within an element. `element` names one element in messages ("triangle", "tetrahedron").
+void check_elements(const std::string& context, std::span<const VertexIndex> elements,
+                    std::size_t vertices_per_element, std::size_t vertex_count,
+                    const char* element) {
+  if (elements.size() % vertices_per_element != 0)
+    throw InvalidInput(context + ": " + std::to_string(elements.size()) +
+                       " indices are not a whole number of " + element + "s (" +
+                       std::to_string(vertices_per_element) + " indices each)");
+  for (std::size_t e = 0; e < elements.size() / vertices_per_element; ++e) {
+    const VertexIndex* vertices = elements.data() + e * vertices_per_element;
+    for (std::size_t k = 0; k < vertices_per_element; ++k) {
+      if (vertices[k] >= vertex_count)
+        throw InvalidInput(context + ": " + element + " " + std::to_string(e) + ": vertex " +
+                           std::to_string(vertices[k]) + " is out of range (the mesh has " +
+                           std::to_string(vertex_count) + " vertices)");
+      for (std::size_t j = 0; j < k; ++j)
+        if (vertices[j] == vertices[k])
+          throw InvalidInput(context + ": " + element + " " + std::to_string(e) + ": vertex " +
+                             std::to_string(vertices[k]) + " appears twice");
+    }
+  }
+}
+
+void check_pins(const std::string& context, std::span<const VertexIndex> pinned,
+                std::size_t vertex_count) {
+  for (const VertexIndex vertex : pinned)
+    if (vertex >= vertex_count)
+      throw InvalidInput(context + ": pinned vertex " + std::to_string(vertex) +
+                         " is out of range (the mesh has " + std::to_string(vertex_count) +
+                         " vertices)");
+}
+
+void require_positive(const std::string& context, const char* name, Real value) {
+  if (!(value > 0) || !std::isfinite(value))
+    throw InvalidInput(context + ": " + name + " is " + number(value) +
+                       ", expected a positive finite number");
+}
+
+void require_non_negative(const std::string& context, const char* name, Real value) {
+  if (!(value >= 0) || !std::isfinite(value))
+    throw InvalidInput(context + ": " + name + " is " + number(value) +
+                       ", expected a finite number >= 0");
+}
+
+void require_poisson_ratio(const std::string& context, Real value) {
+  if (!(value >= 0 && value < Real(0.5)))
+    throw InvalidInput(context + ": poisson_ratio is " + number(value) +
+                       ", expected 0 <= poisson_ratio < 0.5");
+}
+
+void check_options(const std::string& context, const ShellOptions& options) {
+  require_non_negative(context, "distance_compliance", options.distance_compliance);
+  require_non_negative(context, "bending_compliance", options.bending_compliance);
+  require_positive(context, "youngs_modulus", options.youngs_modulus);
+  require_poisson_ratio(context, options.poisson_ratio);
+  require_positive(context, "mass", options.mass);
+}
+
+void check_options(const std::string& context, const SolidOptions& options) {
+  require_positive(context, "youngs_modulus", options.youngs_modulus);
+  require_poisson_ratio(context, options.poisson_ratio);
+  require_non_negative(context, "volume_compliance", options.volume_compliance);
+  require_non_negative(context, "distance_compliance", options.distance_compliance);
+  require_positive(context, "mass", options.mass);
+}
+
+/// Runs build(); an InvalidInput it throws (core's constraint or particle validation) comes
+/// back with "<context>: " in front.
+template <class Build>
+auto with_context(const std::string& context, Build&& build) {
+  try {
+    return build();
+  } catch (const InvalidInput& error) {
+    throw InvalidInput(context + ": " + error.what());
+  }
+}
+
+/// One side of a triangle: the edge as (lower, higher), the direction the triangle runs
+/// along it, the vertex opposite it, and the triangle (for a deterministic tie order).
+struct TriangleSide {
+  VertexIndex lower;
+  VertexIndex higher;
+  VertexIndex from;
+  VertexIndex opposite;
+  std::size_t triangle;
+};
+
+/// All sides of (already validated) triangles, sorted by edge, then by triangle.
+std::vector<TriangleSide> sorted_sides(std::span<const VertexIndex> triangles) {
+  std::vector<TriangleSide> sides;
+  sides.reserve(triangles.size());
+  for (std::size_t t = 0; t < triangles.size() / 3; ++t) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      const VertexIndex from = triangles[3 * t + k];
+      const VertexIndex to = triangles[3 * t + (k + 1) % 3];
+      const VertexIndex opposite = triangles[3 * t + (k + 2) % 3];
+      sides.push_back({std::min(from, to), std::max(from, to), from, opposite, t});
+    }
+  }
+  std::sort(sides.begin(), sides.end(), [](const TriangleSide& a, const TriangleSide& b) {
+    return std::tie(a.lower, a.higher, a.triangle) < std::tie(b.lower, b.higher, b.triangle);
+  });
+  return sides;
+}
+
+/// The unique edges and the bending stencils of (already validated) triangles.
+struct TriangleTopology {
+  std::vector<VertexIndex> edges;     // (lower, higher) per edge, sorted
+  std::vector<VertexIndex> stencils;  // (wing0, wing1, edge0, edge1) per interior manifold edge
+};
+
+TriangleTopology triangle_topology(std::span<const VertexIndex> triangles) {
+  const std::vector<TriangleSide> sides = sorted_sides(triangles);
+  TriangleTopology topology;
+  for (std::size_t first = 0; first < sides.size();) {
+    std::size_t end = first + 1;
+    while (end < sides.size() && sides[end].lower == sides[first].lower &&
+           sides[end].higher == sides[first].higher)
+      ++end;
+    const VertexIndex lower = sides[first].lower, higher = sides[first].higher;
+    topology.edges.insert(topology.edges.end(), {lower, higher});
+    // Exactly two triangles with different opposite vertices (a triangle listed twice has
+    // the same one: no bending there).
+    if (end - first == 2 && sides[first].opposite != sides[first + 1].opposite) {
+      const bool second_runs_up = sides[first + 1].from == lower && sides[first].from != lower;
+      const TriangleSide& wing0 = second_runs_up ? sides[first + 1] : sides[first];
+      const TriangleSide& wing1 = second_runs_up ? sides[first] : sides[first + 1];
+      topology.stencils.insert(topology.stencils.end(),
+                               {wing0.opposite, wing1.opposite, lower, higher});
+    }
+    first = end;
+  }
+  return topology;
+}
+
+double element_measure(std::span<const Vector3r> positions, const VertexIndex* vertices,
+                       std::size_t vertices_per_element) {
+  const Eigen::Vector3d a = positions[vertices[0]].cast<double>();
+  const Eigen::Vector3d b = positions[vertices[1]].cast<double>();
+  const Eigen::Vector3d c = positions[vertices[2]].cast<double>();
+  if (vertices_per_element == 3) return (b - a).cross(c - a).norm() / 2;
+  const Eigen::Vector3d d = positions[vertices[3]].cast<double>();
+  return std::abs((b - a).dot((c - a).cross(d - a))) / 6;
+}
+
+std::vector<Real> lumped_masses_in(const std::string& context,
+                                   std::span<const Vector3r> positions,
+                                   std::span<const VertexIndex> elements,
+                                   std::size_t vertices_per_element, Real total_mass) {
+  const char* element = vertices_per_element == 3 ? "triangle" : "tetrahedron";
+  const std::size_t element_count = elements.size() / vertices_per_element;
+  std::vector<double> measures(element_count);
+  double total_measure = 0;
+  for (std::size_t e = 0; e < element_count; ++e) {
+    const VertexIndex* vertices = elements.data() + e * vertices_per_element;
+    for (std::size_t k = 0; k < vertices_per_element; ++k)
+      if (!positions[vertices[k]].allFinite())
+        throw InvalidInput(context + ": position of vertex " + std::to_string(vertices[k]) +
+                           " is not finite");
+    measures[e] = element_measure(positions, vertices, vertices_per_element);
+    if (!(measures[e] > 0))
+      throw InvalidInput(context + ": " + element + " " + std::to_string(e) + " has zero " +
+                         (vertices_per_element == 3 ? "area" : "volume"));
+    total_measure += measures[e];
+  }
+  std::vector<double> masses(positions.size(), 0);
+  const double mass_per_measure = double(total_mass) / total_measure;
+  for (std::size_t e = 0; e < element_count; ++e) {
+    const double share = measures[e] * mass_per_measure / double(vertices_per_element);
+    for (std::size_t k = 0; k < vertices_per_element; ++k)
+      masses[elements[e * vertices_per_element + k]] += share;
+  }
+  std::vector<Real> result(masses.size());
+  std::transform(masses.begin(), masses.end(), result.begin(),
+                 [](double mass) { return static_cast<Real>(mass); });
+  return result;
+}
+
+/// The particles: inverse mass 1 / mass, 0 where the mass is 0 (no element) or pinned.
+ParticleState particles_of(const std::string& context, std::span<const Vector3r> positions,
+                           const std::vector<Real>& masses, std::span<const VertexIndex> pinned) {
+  std::vector<Real> inverse_masses(masses.size(), 0);
+  for (std::size_t v = 0; v < masses.size(); ++v)
+    if (masses[v] > 0) inverse_masses[v] = Real(1) / masses[v];
+  for (const VertexIndex vertex : pinned) inverse_masses[vertex] = 0;
+  return with_context(context, [&] { return ParticleState(positions, inverse_masses); });
+}
+
+/// Strain triangles of a mesh in space: each triangle laid into its own plane (p0 at the
+/// origin, x along p0 → p1, y toward p2), built there, then indexed into the mesh.
+StrainTriangleConstraints strain_triangles(std::span<const Vector3r> positions,
+                                           std::span<const VertexIndex> triangles) {
+  const std::size_t triangle_count = triangles.size() / 3;
+  std::vector<Vector3r> planar(triangles.size(), Vector3r::Zero());
+  std::vector<ParticleIndex> planar_indices(triangles.size());
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    for (std::size_t k = 0; k < 3; ++k) planar_indices[3 * t + k] = ParticleIndex(3 * t + k);
+    const Vector3r p0 = positions[triangles[3 * t]];
+    const Vector3r e1 = positions[triangles[3 * t + 1]] - p0;
+    const Vector3r e2 = positions[triangles[3 * t + 2]] - p0;
+    const Vector3r normal = e1.cross(e2);
+    const Real length = e1.norm();
+    // A degenerate triangle stays all at the origin: core reports its zero area.
+    if (!(length > 0) || !(normal.norm() > 0) || !normal.allFinite()) continue;
+    const Vector3r x_axis = e1 / length;
+    const Vector3r y_axis = normal.normalized().cross(x_axis);
+    planar[3 * t + 1] = Vector3r(length, 0, 0);
+    planar[3 * t + 2] = Vector3r(e2.dot(x_axis), e2.dot(y_axis), 0);
+  }
+  StrainTriangleConstraints result =
+      make_strain_triangle_constraints({planar_indices, planar});
+  for (std::size_t t = 0; t < triangle_count; ++t)
+    for (std::size_t k = 0; k < 3; ++k) result.particles.particle[k][t] = triangles[3 * t + k];
+  result.particles.particle_count = positions.size();
+  return result;
+}
+
+Model shell_in(const std::string& context, std::span<const Vector3r> positions,
+               std::span<const VertexIndex> triangles, std::span<const VertexIndex> pinned,
+               const ShellOptions& options) {
+  require_vertex_count_fits(context, positions.size());
+  check_options(context, options);
+  if (triangles.empty()) throw InvalidInput(context + ": the mesh has no triangles");
+  check_elements(context, triangles, 3, positions.size(), "triangle");
+  check_pins(context, pinned, positions.size());
+
+  const TriangleTopology topology = triangle_topology(triangles);
+  Model model;
+  ConstraintSets& sets = model.constraints;
+  with_context(context, [&] {
+    switch (options.material) {
+      case ShellMaterial::distance:
+        sets.distance = make_distance_constraints(
+            {topology.edges, positions, Real(1), options.distance_compliance});
+        break;
+      case ShellMaterial::strain_triangle:
+        sets.strain_triangle = strain_triangles(positions, triangles);
+        break;
+      case ShellMaterial::fem_triangle: {
+        const Real shear_modulus = options.youngs_modulus / (2 * (1 + options.poisson_ratio));
+        sets.fem_triangle = make_fem_triangle_constraints(
+            {triangles, positions, options.youngs_modulus, options.youngs_modulus,
+             shear_modulus, options.poisson_ratio, options.poisson_ratio});
+        break;
+      }
+    }
+    switch (options.bending) {
+      case ShellBending::dihedral:
+        sets.dihedral = make_dihedral_constraints(
+            {topology.stencils, positions, Real(1), options.bending_compliance});
+        break;
+      case ShellBending::isometric:
+        sets.isometric_bending = make_isometric_bending_constraints(
+            {topology.stencils, positions, Real(1), options.bending_compliance});
+        break;
+      case ShellBending::none:
+        break;
+    }
+    return 0;
+  });
+  const std::vector<Real> masses = lumped_masses_in(context, positions, triangles, 3, options.mass);
+  model.particles = particles_of(context, positions, masses, pinned);
+  return model;
+}
+
+Model solid_in(const std::string& context, std::span<const Vector3r> positions,
+               std::span<const VertexIndex> tetrahedra, std::span<const VertexIndex> pinned,
+               const SolidOptions& options) {
+  require_vertex_count_fits(context, positions.size());
+  check_options(context, options);
+  if (tetrahedra.empty()) throw InvalidInput(context + ": the mesh has no tetrahedra");
+  check_elements(context, tetrahedra, 4, positions.size(), "tetrahedron");
+  check_pins(context, pinned, positions.size());
+
+  Model model;
+  ConstraintSets& sets = model.constraints;
+  with_context(context, [&] {
+    switch (options.material) {
+      case SolidMaterial::fem_tetra:
+        sets.fem_tetra = make_fem_tetra_constraints(
+            {tetrahedra, positions, options.youngs_modulus, options.poisson_ratio, true});
+        break;
+      case SolidMaterial::strain_tetra:
+        sets.strain_tetra = make_strain_tetra_constraints({tetrahedra, positions});
+        break;
+      case SolidMaterial::volume_and_distance: {
+        sets.volume = make_volume_constraints(
+            {tetrahedra, positions, Real(1), options.volume_compliance});
+        const std::vector<VertexIndex> edges = unique_edges(
+            std::vector<VertexIndex>(tetrahedra.begin(), tetrahedra.end()), 4, positions.size());
+        sets.distance = make_distance_constraints(
+            {edges, positions, Real(1), options.distance_compliance});
+        break;
+      }
+    }
+    return 0;
+  });
+  const std::vector<Real> masses =
+      lumped_masses_in(context, positions, tetrahedra, 4, options.mass);
+  model.particles = particles_of(context, positions, masses, pinned);
+  return model;
+}
+
+}  // namespace
+
+Model make_shell(std::span<const Vector3r> positions, std::span<const VertexIndex> triangles,
+                 std::span<const VertexIndex> pinned, const ShellOptions& options) {
+  return shell_in("shell", positions, triangles, pinned, options);
+}
+
+Model make_solid(std::span<const Vector3r> positions, std::span<const VertexIndex> tetrahedra,
+                 std::span<const VertexIndex> pinned, const SolidOptions& options) {
+  return solid_in("solid", positions, tetrahedra, pinned, options);
+}
+
+Model make_cloth_scene(std::size_t columns, std::size_t rows, const ShellOptions& options) {
+  const std::string context = "cloth scene";
+  ClothGrid grid = with_context(context, [&] {
+    if (columns < 2) return make_cloth_grid(columns, rows);  // reports the size
+    return make_cloth_grid(columns, rows, Real(1) / Real(columns - 1));
+  });
+  for (Vector3r& p : grid.positions) p = Vector3r(p.x(), 0, p.y());
+  const std::array<VertexIndex, 2> pinned = {VertexIndex((rows - 1) * columns),
+                                             VertexIndex(rows * columns - 1)};
+  return shell_in(context, grid.positions, grid.triangle_indices, pinned, options);
+}
+
+Model make_bar_scene(std::size_t cells_x, std::size_t cells_y, std::size_t cells_z,
+                     const SolidOptions& options) {
+  const std::string context = "bar scene";
+  const TetrahedralBar bar = with_context(
+      context, [&] { return make_tetrahedral_bar(cells_x, cells_y, cells_z, Real(0.1)); });
+  std::vector<VertexIndex> pinned;
+  for (std::size_t v = 0; v < bar.vertex_count(); ++v)
+    if (bar.positions[v].z() == 0) pinned.push_back(VertexIndex(v));
+  return solid_in(context, bar.positions, bar.tetrahedron_indices, pinned, options);
+}
+
+Model make_model(const Mesh& mesh, std::span<const VertexIndex> pinned, const ShellOptions& shell,
+                 const SolidOptions& solid) {
+  if (!mesh.tetrahedra.empty())
+    return solid_in("solid of mesh", mesh.positions, mesh.tetrahedra, pinned, solid);
+  if (!mesh.triangles.empty())
+    return shell_in("shell of mesh", mesh.positions, mesh.triangles, pinned, shell);
+  throw InvalidInput("make_model: the mesh has no triangles and no tetrahedra (" +
+                     std::to_string(mesh.vertex_count()) + " vertices)");
+}
+
+std::vector<VertexIndex> lowest_vertices(std::span<const Vector3r> positions, std::size_t axis) {
+  if (axis > 2)
+    throw InvalidInput("lowest_vertices: axis " + std::to_string(axis) +
+                       " is not 0 (x), 1 (y) or 2 (z)");
+  require_vertex_count_fits("lowest_vertices", positions.size());
+  if (positions.empty()) return {};
+  Vector3r low = positions[0], high = positions[0];
+  for (std::size_t v = 0; v < positions.size(); ++v) {
+    if (!positions[v].allFinite())
+      throw InvalidInput("lowest_vertices: position of vertex " + std::to_string(v) +
+                         " is not finite");
+    low = low.cwiseMin(positions[v]);
+    high = high.cwiseMax(positions[v]);
+  }
+  const Real tolerance = Real(1e-6) * (high - low).norm();
+  const auto axis_index = static_cast<Eigen::Index>(axis);
+  std::vector<VertexIndex> lowest;
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    if (positions[v][axis_index] <= low[axis_index] + tolerance)
+      lowest.push_back(VertexIndex(v));
+  return lowest;
+}
+
+std::vector<VertexIndex> bending_stencils(std::span<const VertexIndex> triangles,
+                                          std::size_t vertex_count) {
+  check_elements("bending_stencils", triangles, 3, vertex_count, "triangle");
+  return triangle_topology(triangles).stencils;
+}
+
+std::vector<Real> lumped_masses(std::span<const Vector3r> positions,
+                                std::span<const VertexIndex> elements,
+                                std::size_t vertices_per_element, Real total_mass) {
+  const std::string context = "lumped_masses";
+  if (vertices_per_element != 3 && vertices_per_element != 4)
+    throw InvalidInput(context + ": elements of " + std::to_string(vertices_per_element) +
+                       " vertices, expected 3 (triangles) or 4 (tetrahedra)");
+  require_positive(context, "total_mass", total_mass);
+  check_elements(context, elements, vertices_per_element, positions.size(),
+                 vertices_per_element == 3 ? "triangle" : "tetrahedron");
+  return lumped_masses_in(context, positions, elements, vertices_per_element, total_mass);
+}
+
+}  // namespace tessera::io

@@ -301,6 +301,29 @@ std::size_t cell_count_of(const CellBlock& block) {
 constexpr const char* kRealVtkType = kDoublePrecision ? "Float64" : "Float32";
 constexpr std::size_t kScalarsPerLine = 12;
 
+/// The values of one DataArray, kScalarsPerLine to an indented line; `count` is the array's
+/// length, so the last line is ended wherever it stops.
+class ScalarLines {
+ public:
+  ScalarLines(ChunkedText& chunks, std::size_t count) : chunks_(chunks), count_(count) {}
+  template <class Number>
+  void add(Number value) {
+    std::string& text = chunks_.text();
+    text += (written_ % kScalarsPerLine == 0) ? "          " : " ";
+    append_number(text, value);
+    if (written_ % kScalarsPerLine == kScalarsPerLine - 1 || written_ + 1 == count_) {
+      text += '\n';
+      chunks_.maybe_flush();
+    }
+    ++written_;
+  }
+
+ private:
+  ChunkedText& chunks_;
+  std::size_t count_;
+  std::size_t written_ = 0;
+};
+
 void write_vtu_body(std::ostream& out, const Frame& frame,
                     const std::vector<MergedCellData>& cell_data) {
   std::size_t total_cells = 0;
@@ -323,14 +346,8 @@ void write_vtu_body(std::ostream& out, const Frame& frame,
       text += "        <DataArray type=\"";
       text += kRealVtkType;
       text += "\" Name=\"" + name + "\" format=\"ascii\">\n";
-      for (std::size_t p = 0; p < values.size(); ++p) {
-        text += (p % kScalarsPerLine == 0) ? "          " : " ";
-        append_number(text, values[p]);
-        if (p % kScalarsPerLine == kScalarsPerLine - 1 || p + 1 == values.size()) {
-          text += '\n';
-          chunks.maybe_flush();
-        }
-      }
+      ScalarLines lines(chunks, values.size());
+      for (const Real value : values) lines.add(value);
       text += "        </DataArray>\n";
     }
     text += "      </PointData>\n";
@@ -340,18 +357,12 @@ void write_vtu_body(std::ostream& out, const Frame& frame,
     text += "      <CellData Scalars=\"" + cell_data.front().name + "\">\n";
     for (const MergedCellData& array : cell_data) {
       text += "        <DataArray type=\"Int32\" Name=\"" + array.name + "\" format=\"ascii\">\n";
-      std::size_t written = 0;
+      ScalarLines lines(chunks, total_cells);
       for (std::size_t b = 0; b < frame.blocks.size(); ++b) {
         const std::span<const std::int32_t>* values = array.per_block[b];
         const std::size_t cells = cell_count_of(frame.blocks[b]);
-        for (std::size_t c = 0; c < cells; ++c, ++written) {
-          text += (written % kScalarsPerLine == 0) ? "          " : " ";
-          append_number(text, values != nullptr ? (*values)[c] : std::int32_t(-1));
-          if (written % kScalarsPerLine == kScalarsPerLine - 1 || written + 1 == total_cells) {
-            text += '\n';
-            chunks.maybe_flush();
-          }
-        }
+        for (std::size_t c = 0; c < cells; ++c)
+          lines.add(values != nullptr ? (*values)[c] : std::int32_t(-1));
       }
       text += "        </DataArray>\n";
     }
@@ -392,32 +403,20 @@ void write_vtu_body(std::ostream& out, const Frame& frame,
   // offsets: the end of each cell in connectivity (VTK XML's convention, no leading 0).
   text += "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
   std::uint64_t offset = 0;
-  std::size_t written = 0;
+  ScalarLines offsets(chunks, total_cells);
   for (const CellBlock& block : frame.blocks) {
     const std::size_t per_cell = vertices_per_cell(block.type);
-    for (std::size_t c = 0; c < cell_count_of(block); ++c, ++written) {
+    for (std::size_t c = 0; c < cell_count_of(block); ++c) {
       offset += per_cell;
-      text += (written % kScalarsPerLine == 0) ? "          " : " ";
-      append_number(text, offset);
-      if (written % kScalarsPerLine == kScalarsPerLine - 1 || written + 1 == total_cells) {
-        text += '\n';
-        chunks.maybe_flush();
-      }
+      offsets.add(offset);
     }
   }
   text += "        </DataArray>\n";
   text += "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-  written = 0;
+  ScalarLines types(chunks, total_cells);
   for (const CellBlock& block : frame.blocks) {
     const unsigned vtk_type = vtk_cell_type(block.type);
-    for (std::size_t c = 0; c < cell_count_of(block); ++c, ++written) {
-      text += (written % kScalarsPerLine == 0) ? "          " : " ";
-      append_number(text, vtk_type);
-      if (written % kScalarsPerLine == kScalarsPerLine - 1 || written + 1 == total_cells) {
-        text += '\n';
-        chunks.maybe_flush();
-      }
-    }
+    for (std::size_t c = 0; c < cell_count_of(block); ++c) types.add(vtk_type);
   }
   text += "        </DataArray>\n";
   text += "      </Cells>\n";

@@ -320,9 +320,9 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
       auto& source = to_jacobi ? jacobi_source[f] : coloured_source[f];
       if (!to_jacobi) source.resize(round_up(source.size(), kMaxLanes), kPadding);
       const std::size_t begin = source.size();
+      // Jacobi slots are known only once build_jacobi_set has sorted the set (below).
       for (const std::uint32_t local : members[f]) {
-        location_[family_first_[f] + local] =
-            std::uint32_t(source.size()) | (to_jacobi ? kJacobiBit : 0u);
+        if (!to_jacobi) location_[family_first_[f] + local] = std::uint32_t(source.size());
         source.push_back(local);
       }
       if (to_jacobi) continue;
@@ -335,9 +335,9 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
       phase_sizes_.push_back(colour.size());
     }
   }
-  if (std::any_of(location_.begin(), location_.end(),
-                  [](std::uint32_t slot) { return (slot & ~kJacobiBit) >= kJacobiBit / 2; }))
-    throw InvalidInput("schedule: more than 2^30 constraints in one family");
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
+    if (std::max(coloured_source[f].size(), jacobi_source[f].size()) >= kJacobiBit / 2)
+      throw InvalidInput("schedule: more than 2^30 constraints in one family");
 
   // The coloured batches.
   const auto renumber = [&](std::size_t, std::size_t, ParticleIndex p) {

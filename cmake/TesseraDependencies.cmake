@@ -4,6 +4,7 @@ find_package(Eigen3 3.4 REQUIRED NO_MODULE)   # libeigen3-dev
 find_package(TBB REQUIRED)                    # libtbb-dev (oneTBB 2021)
 find_package(METIS REQUIRED)                  # libmetis-dev, see FindMETIS.cmake
 find_package(hwy 1.0 REQUIRED)                # libhwy-dev (Highway: SIMD with runtime dispatch)
+find_package(nlohmann_json 3.10 REQUIRED)      # nlohmann-json3-dev (scene files; used privately)
 
 # TESSERA_SIMD: how the batched kernels pick their instruction set.
 #   dispatch (default)  compile for AVX-512, AVX2, SSE4 and a portable fallback, and pick the

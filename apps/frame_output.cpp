@@ -1,0 +1,111 @@
+#include "frame_output.hpp"
+
+#include <cstdio>
+#include <system_error>
+
+#include <tessera/core/error.hpp>
+
+namespace tessera::cli {
+namespace {
+
+std::filesystem::path frame_file(const std::filesystem::path& folder, std::size_t frame,
+                                 const char* extension) {
+  char name[32];
+  std::snprintf(name, sizeof name, "frame_%05zu.%s", frame, extension);
+  return folder / name;
+}
+
+}  // namespace
+
+FrameOutput::FrameOutput(std::filesystem::path folder, const io::Scene& scene,
+                         const Colouring* colouring, bool write_obj)
+    : folder_(std::move(folder)), series_(folder_ / "frames.pvd"), write_obj_(write_obj) {
+  std::error_code error;
+  if (!std::filesystem::exists(folder_, error)) {
+    if (!std::filesystem::create_directory(folder_, error) || error)
+      throw InvalidInput("--out: cannot create folder " + folder_.string() + ": " +
+                         (error ? error.message() : std::string("unknown error")));
+  } else if (!std::filesystem::is_directory(folder_, error)) {
+    throw InvalidInput("--out: " + folder_.string() + " exists and is not a folder");
+  }
+
+  const ParticleState& particles = scene.model.particles;
+  inverse_mass_.resize(particles.size());
+  for (std::size_t p = 0; p < particles.size(); ++p) inverse_mass_[p] = particles.inverse_mass[p];
+
+  Cells surface{io::CellType::triangle, scene.surface_triangles, {}, {}, {}};
+  const std::size_t surface_cells = surface.vertices.size() / 3;
+  surface.colour.assign(surface_cells, -1);
+  surface.family.assign(surface_cells, -1);
+  surface.constraint.assign(surface_cells, -1);
+  cells_.push_back(std::move(surface));
+  add_constraint_cells(scene.model, colouring);
+}
+
+void FrameOutput::add_constraint_cells(const Model& model, const Colouring* colouring) {
+  Cells lines{io::CellType::line, {}, {}, {}, {}};
+  Cells triangles{io::CellType::triangle, {}, {}, {}, {}};
+  Cells tetrahedra{io::CellType::tetrahedron, {}, {}, {}, {}};
+  const auto add = [&](Cells& cells, ConstraintFamily family, std::size_t index,
+                       std::initializer_list<io::VertexIndex> vertices) {
+    const ConstraintIndex id = model.constraint_id(family, index);
+    cells.vertices.insert(cells.vertices.end(), vertices);
+    cells.colour.push_back(colouring ? std::int32_t(colouring->colour_of(id)) : -1);
+    cells.family.push_back(std::int32_t(family));
+    cells.constraint.push_back(std::int32_t(id));
+  };
+  model.constraints.for_each([&](ConstraintFamily family, const auto& batch) {
+    using Batch = std::decay_t<decltype(batch)>;
+    if constexpr (requires { batch.particles.particle; }) {
+      constexpr int arity = decltype(batch.particles)::kParticlesPerConstraint;
+      const auto& p = batch.particles.particle;
+      for (std::size_t c = 0; c < batch.size(); ++c) {
+        switch (family) {
+          case ConstraintFamily::distance: add(lines, family, c, {p[0][c], p[1][c]}); break;
+          case ConstraintFamily::dihedral:
+          case ConstraintFamily::isometric_bending:
+            if constexpr (arity == 4) add(lines, family, c, {p[2][c], p[3][c]});
+            break;
+          case ConstraintFamily::strain_triangle:
+          case ConstraintFamily::fem_triangle:
+            if constexpr (arity == 3) add(triangles, family, c, {p[0][c], p[1][c], p[2][c]});
+            break;
+          case ConstraintFamily::volume:
+          case ConstraintFamily::strain_tetra:
+          case ConstraintFamily::fem_tetra:
+            if constexpr (arity == 4) add(tetrahedra, family, c, {p[0][c], p[1][c], p[2][c], p[3][c]});
+            break;
+          default: break;  // proximity families: no cell of their own
+        }
+      }
+    }
+    (void)sizeof(Batch);
+  });
+  for (Cells* cells : {&lines, &triangles, &tetrahedra})
+    if (!cells->colour.empty()) cells_.push_back(std::move(*cells));
+}
+
+void FrameOutput::write(std::size_t frame, double time, std::span<const Vector3r> positions) {
+  io::Frame data;
+  data.positions = positions;
+  data.point_data.emplace_back("inverse_mass", inverse_mass_);
+  for (const Cells& cells : cells_) {
+    io::CellBlock block{cells.type, cells.vertices, {}};
+    block.cell_data.emplace_back("colour", cells.colour);
+    block.cell_data.emplace_back("family", cells.family);
+    block.cell_data.emplace_back("constraint", cells.constraint);
+    data.blocks.push_back(std::move(block));
+  }
+  const std::filesystem::path vtu = frame_file(folder_, frame, "vtu");
+  io::write_vtu(vtu, data);
+  ++files_written_;
+  series_.add(time, vtu);
+  series_.write();
+  if (write_obj_) {
+    data.blocks.resize(1);  // the surface
+    io::write_obj(frame_file(folder_, frame, "obj"), data);
+    ++files_written_;
+  }
+}
+
+}  // namespace tessera::cli

@@ -1,0 +1,190 @@
+// `tessera run`: build a scene, colour it, step the solver frame by frame (writing frames when
+// asked), and print what it measured as aligned "key  value" lines or one JSON object.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+#include <oneapi/tbb/task_arena.h>
+
+#include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/colouring_strategy.hpp>
+#include <tessera/coloring/model_graph.hpp>
+#include <tessera/core/error.hpp>
+#include <tessera/parallel/solver.hpp>
+
+#include "commands.hpp"
+#include "frame_output.hpp"
+#include "progress_bar.hpp"
+#include "summary.hpp"
+
+namespace tessera::cli {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// The scene's settings with the command line's overrides.
+io::SimulationSettings simulation_of(const io::SceneDescription& scene, const RunOptions& options) {
+  io::SimulationSettings simulation = scene.simulation;
+  if (options.frames) simulation.frames = *options.frames;
+  if (options.substeps) simulation.substeps = *options.substeps;
+  if (options.iterations) simulation.iterations = *options.iterations;
+  if (options.threads) simulation.threads = *options.threads;
+  if (options.time_step) simulation.time_step = Real(*options.time_step);
+  if (options.velocity_damping) simulation.velocity_damping = Real(*options.velocity_damping);
+  if (options.strategy) simulation.strategy = *options.strategy;
+  if (options.mode) simulation.mode = *options.mode;
+  return simulation;
+}
+
+std::string state_hash(const std::vector<Vector3r>& positions) {
+  std::uint64_t hash = fnv1a(nullptr, 0);
+  for (const Vector3r& p : positions) {
+    const Real xyz[3] = {p.x(), p.y(), p.z()};
+    hash = fnv1a(xyz, sizeof xyz, hash);
+  }
+  return hex(hash);
+}
+
+}  // namespace
+
+CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
+  CLI::App* command = app.add_subcommand(
+      "run", "Simulate a scene and print a summary (with no SCENE: the default cloth)");
+  add_scene_options(*command, options.scene);
+  command->add_option("--frames", options.frames, "time steps to simulate (default 60)")
+      ->check(CLI::Range(std::size_t(0), std::size_t(1) << 31));
+  command->add_option("--substeps", options.substeps, "substeps per frame (default 16)")
+      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 20));
+  command->add_option("--iterations", options.iterations, "projection sweeps per substep (default 2)")
+      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 20));
+  command->add_option("--dt", options.time_step, "seconds per frame (default 1/60)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double value = std::strtod(text.c_str(), &end);
+            if (end == text.c_str() || *end != '\0' || !std::isfinite(value) || !(value > 0))
+              return "must be a positive finite number of seconds, not '" + text + "'";
+            return {};
+          },
+          "SECONDS"));
+  command->add_option("--damping", options.velocity_damping, "velocity damping per second (default 0)")
+      ->check(CLI::Range(0.0, 1e6));
+  command->add_option("--threads", options.threads, "worker threads (default: every hardware thread)")
+      ->check(CLI::Range(std::size_t(1), std::size_t(4096)));
+  command->add_option("--strategy", options.strategy,
+                      "colouring strategy (default stencil; `tessera info` lists them)");
+  command->add_option("--mode", options.mode, "gs, jacobi, hybrid or sequential (default gs)");
+  command->add_flag("--balance", options.balance, "run the colouring's balance pass");
+  command->add_option("--out", options.out,
+                      "write every frame as DIR/frame_NNNNN.vtu plus DIR/frames.pvd (DIR is "
+                      "created if its parent exists)");
+  command->add_flag("--obj", options.write_obj, "with --out: also DIR/frame_NNNNN.obj");
+  command->add_flag("--json", options.json, "print the summary as one JSON object");
+  return command;
+}
+
+int run_command(const RunOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (options.write_obj && !options.out) throw InvalidInput("--obj needs --out DIR");
+  const io::SceneDescription description = describe_scene(options.scene);
+  const io::SimulationSettings simulation = simulation_of(description, options);
+  // Names are checked before the (possibly large) scene is built.
+  const SolverMode mode = parse_solver_mode(simulation.mode);
+  const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
+  const ColouringStrategy& strategy = registry.get(simulation.strategy);
+
+  io::Scene scene = io::build_scene(description);
+  const std::size_t constraints = scene.model.constraints.size();
+  if (constraints == 0) throw InvalidInput("scene '" + description.name + "' has no constraints");
+
+  // Colouring, in an arena of the solver's thread count (its result does not depend on it).
+  const auto colouring_start = std::chrono::steady_clock::now();
+  const ConstraintGraph graph = constraint_graph(scene.model);
+  std::unique_ptr<tbb::task_arena> arena =
+      simulation.threads ? std::make_unique<tbb::task_arena>(int(simulation.threads))
+                         : std::make_unique<tbb::task_arena>();
+  std::optional<ColouringRun> colouring;
+  if (mode != SolverMode::sequential)
+    arena->execute([&] {
+      colouring = run_colouring(strategy, graph,
+                                ColouringOptions{.balance = options.balance, .locality = true});
+    });
+  if (colouring && !colouring->statistics.valid)
+    throw std::logic_error("strategy " + simulation.strategy + " gave an invalid colouring: " +
+                           colouring->statistics.problem);
+  const double seconds_coloring = seconds_since(colouring_start);
+
+  std::optional<FrameOutput> output;
+  if (options.out)
+    output.emplace(*options.out, scene, colouring ? &colouring->colouring : nullptr,
+                   options.write_obj);
+
+  SolverSettings settings;
+  settings.mode = mode;
+  settings.threads = simulation.threads;
+  settings.time_step = simulation.time_step;
+  settings.substeps = simulation.substeps;
+  settings.iterations = simulation.iterations;
+  settings.gravity = simulation.gravity;
+  settings.velocity_damping = simulation.velocity_damping;
+  const std::size_t particles = scene.model.particles.size();
+  const std::size_t pinned = scene.pinned.size();
+  Solver solver = colouring ? Solver(std::move(scene.model), colouring->colouring, settings)
+                            : Solver(std::move(scene.model), settings);
+
+  if (output) output->write(0, 0.0, solver.positions());
+  Residual initial, final;
+  if (simulation.frames == 0) initial = final = solver.residual();
+  {
+    ProgressBar progress(simulation.frames, "frames");
+    for (std::size_t frame = 1; frame <= simulation.frames; ++frame) {
+      solver.step();
+      if (frame == 1) initial = solver.last_step().residual_before;
+      if (output) output->write(frame, double(frame) * double(simulation.time_step), solver.positions());
+      progress.update(frame);
+    }
+  }
+  if (simulation.frames > 0) final = solver.last_step().residual_after;
+
+  const SolverStatistics& statistics = solver.statistics();
+  Summary summary;
+  summary.add("scene", description.name);
+  summary.add("particles", particles);
+  summary.add("pinned", pinned);
+  summary.add("constraints", constraints);
+  summary.add("colours", colouring ? colouring->statistics.colours : 0);
+  summary.add("colour_lower_bound", graph.colour_lower_bound());
+  summary.add("strategy", colouring ? simulation.strategy : std::string("none"));
+  summary.add("mode", std::string(solver_mode_name(mode)));
+  summary.add("threads", statistics.threads);
+  summary.add("frames", simulation.frames);
+  summary.add("substeps", simulation.substeps);
+  summary.add("iterations", simulation.iterations);
+  summary.add("time_step", double(simulation.time_step));
+  summary.add("seconds_coloring", seconds_coloring);
+  summary.add("seconds_schedule", statistics.seconds_schedule);
+  summary.add("seconds_stepping", statistics.seconds_stepping);
+  summary.add("seconds_projection", statistics.seconds_projection);
+  summary.add("projections", statistics.projections);
+  summary.add("projections_per_second",
+              statistics.seconds_projection > 0 ? double(statistics.projections) / statistics.seconds_projection : 0.0);
+  summary.add("residual_rms_initial", initial.rms);
+  summary.add("residual_rms_final", final.rms);
+  summary.add("residual_max_final", final.max);
+  summary.add("state_hash", state_hash(solver.positions()));
+  if (output) {
+    summary.add("output", output->folder().string());
+    summary.add("files_written", output->files_written());
+  }
+  summary.add("seconds_total", seconds_since(start));
+  summary.print(std::cout, options.json);
+  return 0;
+}
+
+}  // namespace tessera::cli

@@ -1,0 +1,73 @@
+#include "scene_options.hpp"
+
+#include <array>
+#include <string_view>
+
+#include <tessera/core/error.hpp>
+
+namespace tessera::cli {
+namespace {
+
+template <class Enum, std::size_t N>
+Enum choose(const std::string& option, const std::string& value,
+            const std::array<std::string_view, N>& names) {
+  for (std::size_t i = 0; i < N; ++i)
+    if (names[i] == value) return Enum(i);
+  std::string known;
+  for (std::string_view name : names) known += (known.empty() ? "" : ", ") + std::string(name);
+  throw InvalidInput(option + ": unknown value '" + value + "' (known: " + known + ")");
+}
+
+constexpr std::array<std::string_view, 3> kShellMaterials = {"distance", "strain_triangle",
+                                                             "fem_triangle"};
+constexpr std::array<std::string_view, 3> kBendings = {"dihedral", "isometric", "none"};
+constexpr std::array<std::string_view, 3> kSolidMaterials = {"fem_tetra", "strain_tetra",
+                                                             "volume_and_distance"};
+
+}  // namespace
+
+void add_scene_options(CLI::App& command, SceneOptions& options) {
+  command.add_option("scene", options.scene,
+                     "cloth, cloth:N, cloth:CxR (vertices), bar, bar:XxYxZ (cells), a mesh "
+                     "file (.obj, .node/.ele, .msh) or a scene file (.json)")
+      ->capture_default_str();
+  command.add_option("--shell-material", options.shell_material,
+                     "triangle meshes: distance, strain_triangle or fem_triangle");
+  command.add_option("--bending", options.bending,
+                     "triangle meshes: dihedral, isometric or none");
+  command.add_option("--solid-material", options.solid_material,
+                     "tetrahedral meshes: fem_tetra, strain_tetra or volume_and_distance");
+  command.add_option("--pins", options.pins,
+                     "default, none, lowest-x|y|z or highest-x|y|z");
+}
+
+io::SceneDescription describe_scene(const SceneOptions& options) {
+  // The cheap checks of the overrides first, so a typo is reported before a big scene loads.
+  const auto shell_material =
+      options.shell_material ? std::optional(choose<io::ShellMaterial>(
+                                   "--shell-material", *options.shell_material, kShellMaterials))
+                             : std::nullopt;
+  const auto bending = options.bending ? std::optional(choose<io::ShellBending>(
+                                             "--bending", *options.bending, kBendings))
+                                       : std::nullopt;
+  const auto solid_material =
+      options.solid_material ? std::optional(choose<io::SolidMaterial>(
+                                   "--solid-material", *options.solid_material, kSolidMaterials))
+                             : std::nullopt;
+  std::optional<io::PinRule> pins;
+  if (options.pins) {
+    try {
+      pins = io::parse_pin_rule(*options.pins);
+    } catch (const InvalidInput& error) {
+      throw InvalidInput(std::string("--pins: ") + error.what());
+    }
+  }
+  io::SceneDescription description = io::parse_scene_spec(options.scene);
+  if (shell_material) description.shell.material = *shell_material;
+  if (bending) description.shell.bending = *bending;
+  if (solid_material) description.solid.material = *solid_material;
+  if (pins) description.pins = *pins;
+  return description;
+}
+
+}  // namespace tessera::cli

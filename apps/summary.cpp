@@ -1,0 +1,45 @@
+#include "summary.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace tessera::cli {
+
+std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t hash) {
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < size; ++i) {
+    hash ^= bytes[i];
+    hash *= 1099511628211ull;
+  }
+  return hash;
+}
+
+std::string hex(std::uint64_t value) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
+  return text;
+}
+
+std::string Summary::text(const nlohmann::ordered_json& value) {
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_number_float()) {
+    char number[32];
+    std::snprintf(number, sizeof number, "%.6g", value.get<double>());
+    return number;
+  }
+  return value.dump();
+}
+
+void Summary::print(std::ostream& out, bool as_json) const {
+  if (as_json) {
+    out << json_.dump() << '\n';
+  } else {
+    std::size_t width = 0;
+    for (const auto& [key, value] : json_.items()) width = std::max(width, key.size());
+    for (const auto& [key, value] : json_.items())
+      out << key << std::string(width + 2 - key.size(), ' ') << text(value) << '\n';
+  }
+  out.flush();
+}
+
+}  // namespace tessera::cli

@@ -1,0 +1,38 @@
+// A command's results as ordered key/value pairs, printed either as aligned "key  value"
+// lines for people or as one JSON object for scripts (same keys, same order).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <ostream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace tessera::cli {
+
+/// 64-bit FNV-1a of a byte range, continuing from `hash`: the state and colouring hashes.
+std::uint64_t fnv1a(const void* data, std::size_t size,
+                    std::uint64_t hash = 14695981039346656037ull);
+/// 16 lowercase hex digits.
+std::string hex(std::uint64_t value);
+
+class Summary {
+ public:
+  template <class Value>
+  void add(const std::string& key, const Value& value) {
+    json_[key] = value;
+  }
+  const nlohmann::ordered_json& json() const { return json_; }
+
+  /// JSON: one line. Text: one line per key, values aligned; numbers with 6 significant digits.
+  void print(std::ostream& out, bool as_json) const;
+
+  /// A value as the text form prints it.
+  static std::string text(const nlohmann::ordered_json& value);
+
+ private:
+  nlohmann::ordered_json json_ = nlohmann::ordered_json::object();
+};
+
+}  // namespace tessera::cli

@@ -1,0 +1,475 @@
+// Scene specs and JSON scene files into SceneDescriptions, and descriptions into Scenes.
+//
+// The JSON reader walks the object key by key against a table of the keys it knows, so an
+// unknown or misspelt key is an error that names it, and every value is checked for its type
+// and range with a message that names the key.
+#include <tessera/io/scene_file.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <utility>
+
+#include <nlohmann/json.hpp>
+
+#include <tessera/core/error.hpp>
+#include <tessera/io/mesh_readers.hpp>
+
+namespace tessera::io {
+namespace {
+
+using Json = nlohmann::json;
+
+constexpr std::string_view kAxes = "xyz";
+
+/// Parses "AxBxC" (count parts) into positive integers; false on any other text.
+bool parse_sizes(std::string_view text, std::size_t* sizes, std::size_t count) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t end = i + 1 < count ? text.find('x') : text.size();
+    if (end == std::string_view::npos) return false;
+    const std::string_view part = text.substr(0, end);
+    if (part.empty() || part.size() > 9) return false;
+    const auto [next, error] = std::from_chars(part.data(), part.data() + part.size(), sizes[i]);
+    if (error != std::errc() || next != part.data() + part.size()) return false;
+    text.remove_prefix(std::min(text.size(), end + 1));
+  }
+  return true;
+}
+
+/// The pins a rule picks among `positions`, or `defaults` for scene_default.
+std::vector<VertexIndex> pins_of(const PinRule& rule, std::span<const Vector3r> positions,
+                                 std::vector<VertexIndex> defaults) {
+  switch (rule.kind) {
+    case PinRule::Kind::scene_default: return defaults;
+    case PinRule::Kind::none: return {};
+    case PinRule::Kind::lowest: return lowest_vertices(positions, rule.axis);
+    case PinRule::Kind::highest: {
+      std::vector<Vector3r> mirrored(positions.begin(), positions.end());
+      for (Vector3r& p : mirrored) p = -p;
+      return lowest_vertices(mirrored, rule.axis);
+    }
+    case PinRule::Kind::list:
+      for (const VertexIndex v : rule.vertices)
+        if (v >= positions.size())
+          throw InvalidInput("pins: vertex " + std::to_string(v) + " is out of range (the scene has " +
+                             std::to_string(positions.size()) + " vertices)");
+      return rule.vertices;
+  }
+  return {};
+}
+
+/// Reads the keys of one JSON object against `fields`; throws for an unknown key.
+class ObjectReader {
+ public:
+  ObjectReader(const Json& object, std::string file, std::string path)
+      : object_(object), file_(std::move(file)), path_(std::move(path)) {
+    if (!object_.is_object()) fail(where() + " must be an object");
+  }
+
+  [[noreturn]] void fail(const std::string& problem) const {
+    throw InvalidInput(file_ + ": " + problem);
+  }
+  std::string where() const { return path_.empty() ? "the scene" : "'" + path_ + "'"; }
+  std::string key_name(const std::string& key) const {
+    return "'" + (path_.empty() ? key : path_ + "." + key) + "'";
+  }
+
+  /// Throws for the first key not in `known`.
+  void only(std::initializer_list<std::string_view> known) const {
+    for (const auto& [key, value] : object_.items())
+      if (std::find(known.begin(), known.end(), key) == known.end())
+        fail("unknown key " + key_name(key));
+  }
+  const Json* find(const std::string& key) const {
+    const auto found = object_.find(key);
+    return found == object_.end() ? nullptr : &*found;
+  }
+
+  static std::string show(const Json& value) {
+    std::string text = value.dump();
+    if (text.size() > 40) text = text.substr(0, 37) + "...";
+    return text;
+  }
+
+  void read_real(const std::string& key, Real& out, double low, bool low_inclusive,
+                 double high = std::numeric_limits<double>::infinity(),
+                 bool high_inclusive = false) const {
+    const Json* value = find(key);
+    if (!value) return;
+    const auto range = [&] {
+      std::ostringstream text;
+      text << (low_inclusive ? "in [" : "in (") << low << ", " << high
+           << (high_inclusive ? "]" : ")");
+      return text.str();
+    };
+    if (!value->is_number()) fail(key_name(key) + " must be a number " + range() + ", not " + show(*value));
+    const double number = value->get<double>();
+    const bool above = low_inclusive ? number >= low : number > low;
+    const bool below = high_inclusive ? number <= high : number < high;
+    if (!std::isfinite(number) || !above || !below ||
+        !std::isfinite(static_cast<double>(static_cast<Real>(number))))
+      fail(key_name(key) + " must be a number " + range() + ", not " + show(*value));
+    out = static_cast<Real>(number);
+  }
+
+  void read_count(const std::string& key, std::size_t& out, std::size_t low) const {
+    const Json* value = find(key);
+    if (!value) return;
+    const std::string need = low == 0 ? "a non-negative integer" : "a positive integer";
+    if (!value->is_number_integer() || (value->is_number_integer() && value->get<std::int64_t>() < 0))
+      fail(key_name(key) + " must be " + need + ", not " + show(*value));
+    const auto number = value->get<std::uint64_t>();
+    if (number < low || number > std::uint64_t(1) << 31)
+      fail(key_name(key) + " must be " + need + " up to 2^31, not " + show(*value));
+    out = static_cast<std::size_t>(number);
+  }
+
+  /// A string that must be one of `choices`; returns its index.
+  template <std::size_t N>
+  bool read_choice(const std::string& key, const std::array<std::string_view, N>& choices,
+                   std::size_t& out) const {
+    const Json* value = find(key);
+    if (!value) return false;
+    std::string list;
+    for (std::string_view choice : choices) list += (list.empty() ? "" : ", ") + std::string(choice);
+    if (!value->is_string()) fail(key_name(key) + " must be one of " + list + ", not " + show(*value));
+    const std::string text = value->get<std::string>();
+    const auto found = std::find(choices.begin(), choices.end(), text);
+    if (found == choices.end()) fail(key_name(key) + " must be one of " + list + ", not " + show(*value));
+    out = static_cast<std::size_t>(found - choices.begin());
+    return true;
+  }
+
+  bool read_string(const std::string& key, std::string& out) const {
+    const Json* value = find(key);
+    if (!value) return false;
+    if (!value->is_string() || value->get<std::string>().empty())
+      fail(key_name(key) + " must be a non-empty string, not " + show(*value));
+    out = value->get<std::string>();
+    return true;
+  }
+
+  const std::string& file() const { return file_; }
+
+ private:
+  const Json& object_;
+  std::string file_;
+  std::string path_;
+};
+
+constexpr std::array<std::string_view, 3> kShellMaterials = {"distance", "strain_triangle",
+                                                             "fem_triangle"};
+constexpr std::array<std::string_view, 3> kShellBendings = {"dihedral", "isometric", "none"};
+constexpr std::array<std::string_view, 3> kSolidMaterials = {"fem_tetra", "strain_tetra",
+                                                             "volume_and_distance"};
+
+void read_shell(const ObjectReader& scene, const Json& json, ShellOptions& shell) {
+  const ObjectReader reader(json, scene.file(), "shell");
+  reader.only({"material", "bending", "distance_compliance", "bending_compliance",
+               "youngs_modulus", "poisson_ratio", "mass"});
+  std::size_t choice = 0;
+  if (reader.read_choice("material", kShellMaterials, choice)) shell.material = ShellMaterial(choice);
+  if (reader.read_choice("bending", kShellBendings, choice)) shell.bending = ShellBending(choice);
+  reader.read_real("distance_compliance", shell.distance_compliance, 0, true);
+  reader.read_real("bending_compliance", shell.bending_compliance, 0, true);
+  reader.read_real("youngs_modulus", shell.youngs_modulus, 0, false);
+  reader.read_real("poisson_ratio", shell.poisson_ratio, 0, true, 0.5, false);
+  reader.read_real("mass", shell.mass, 0, false);
+}
+
+void read_solid(const ObjectReader& scene, const Json& json, SolidOptions& solid) {
+  const ObjectReader reader(json, scene.file(), "solid");
+  reader.only({"material", "youngs_modulus", "poisson_ratio", "volume_compliance",
+               "distance_compliance", "mass"});
+  std::size_t choice = 0;
+  if (reader.read_choice("material", kSolidMaterials, choice)) solid.material = SolidMaterial(choice);
+  reader.read_real("youngs_modulus", solid.youngs_modulus, 0, false);
+  reader.read_real("poisson_ratio", solid.poisson_ratio, 0, true, 0.5, false);
+  reader.read_real("volume_compliance", solid.volume_compliance, 0, true);
+  reader.read_real("distance_compliance", solid.distance_compliance, 0, true);
+  reader.read_real("mass", solid.mass, 0, false);
+}
+
+PinRule read_pins(const ObjectReader& scene, const Json& value) {
+  if (value.is_string()) {
+    try {
+      return parse_pin_rule(value.get<std::string>());
+    } catch (const InvalidInput& error) {
+      scene.fail(std::string("'pins': ") + error.what());
+    }
+  }
+  if (value.is_array()) {
+    PinRule rule;
+    rule.kind = PinRule::Kind::list;
+    for (std::size_t i = 0; i < value.size(); ++i) {
+      const Json& entry = value[i];
+      if (!entry.is_number_integer() || entry.get<std::int64_t>() < 0 ||
+          entry.get<std::uint64_t>() > std::numeric_limits<VertexIndex>::max())
+        scene.fail("'pins'[" + std::to_string(i) + "] must be a vertex number, not " +
+                   ObjectReader::show(entry));
+      rule.vertices.push_back(entry.get<VertexIndex>());
+    }
+    return rule;
+  }
+  scene.fail("'pins' must be a rule (\"default\", \"none\", \"lowest-y\", ...) or an array of "
+             "vertex numbers, not " + ObjectReader::show(value));
+}
+
+SceneDescription describe(const Json& json, const std::string& name,
+                          const std::filesystem::path& base) {
+  const ObjectReader reader(json, name, "");
+  reader.only({"name", "generator", "mesh", "pins", "shell", "solid", "gravity", "time_step",
+               "substeps", "iterations", "frames", "velocity_damping", "strategy", "mode",
+               "threads"});
+  const Json* generator = reader.find("generator");
+  const Json* mesh = reader.find("mesh");
+  if ((generator != nullptr) == (mesh != nullptr))
+    reader.fail("the scene needs exactly one of 'generator' (e.g. \"cloth:128x128\") and 'mesh' (a file)");
+
+  SceneDescription description;
+  if (generator) {
+    std::string spec;
+    reader.read_string("generator", spec);
+    if (spec.rfind("cloth", 0) != 0 && spec.rfind("bar", 0) != 0)
+      reader.fail("'generator' must be \"cloth\", \"cloth:CxR\", \"bar\" or \"bar:XxYxZ\", not " +
+                  ObjectReader::show(*generator));
+    try {
+      description = parse_scene_spec(spec);
+    } catch (const InvalidInput& error) {
+      reader.fail(std::string("'generator': ") + error.what());
+    }
+  } else {
+    std::string file;
+    reader.read_string("mesh", file);
+    description.source = SceneSource::mesh;
+    description.mesh_file = std::filesystem::path(file).is_absolute() ? std::filesystem::path(file)
+                                                                     : base / file;
+    description.name = file;
+  }
+  reader.read_string("name", description.name);
+  if (const Json* pins = reader.find("pins")) description.pins = read_pins(reader, *pins);
+  if (const Json* shell = reader.find("shell")) read_shell(reader, *shell, description.shell);
+  if (const Json* solid = reader.find("solid")) read_solid(reader, *solid, description.solid);
+
+  SimulationSettings& simulation = description.simulation;
+  if (const Json* gravity = reader.find("gravity")) {
+    if (!gravity->is_array() || gravity->size() != 3 ||
+        !std::all_of(gravity->begin(), gravity->end(), [](const Json& g) {
+          return g.is_number() && std::isfinite(g.get<double>());
+        }))
+      reader.fail("'gravity' must be an array of 3 finite numbers, not " + ObjectReader::show(*gravity));
+    for (Eigen::Index k = 0; k < 3; ++k)
+      simulation.gravity[k] = static_cast<Real>((*gravity)[std::size_t(k)].get<double>());
+  }
+  reader.read_real("time_step", simulation.time_step, 0, false);
+  reader.read_count("substeps", simulation.substeps, 1);
+  reader.read_count("iterations", simulation.iterations, 1);
+  reader.read_count("frames", simulation.frames, 0);
+  reader.read_real("velocity_damping", simulation.velocity_damping, 0, true);
+  reader.read_string("strategy", simulation.strategy);
+  reader.read_string("mode", simulation.mode);
+  reader.read_count("threads", simulation.threads, 0);
+  return description;
+}
+
+}  // namespace
+
+PinRule parse_pin_rule(std::string_view text) {
+  PinRule rule;
+  if (text == "default") return rule;
+  if (text == "none") {
+    rule.kind = PinRule::Kind::none;
+    return rule;
+  }
+  for (const auto& [prefix, kind] : {std::pair{std::string_view("lowest-"), PinRule::Kind::lowest},
+                                     std::pair{std::string_view("highest-"), PinRule::Kind::highest}})
+    if (text.size() == prefix.size() + 1 && text.substr(0, prefix.size()) == prefix &&
+        kAxes.find(text.back()) != std::string_view::npos) {
+      rule.kind = kind;
+      rule.axis = kAxes.find(text.back());
+      return rule;
+    }
+  throw InvalidInput("unknown pin rule '" + std::string(text) +
+                     "' (known: default, none, lowest-x, lowest-y, lowest-z, highest-x, "
+                     "highest-y, highest-z)");
+}
+
+std::string describe_pin_rule(const PinRule& rule) {
+  switch (rule.kind) {
+    case PinRule::Kind::scene_default: return "default";
+    case PinRule::Kind::none: return "none";
+    case PinRule::Kind::lowest: return std::string("lowest-") + kAxes[rule.axis];
+    case PinRule::Kind::highest: return std::string("highest-") + kAxes[rule.axis];
+    case PinRule::Kind::list: return "list of " + std::to_string(rule.vertices.size()) + " vertices";
+  }
+  return {};
+}
+
+SceneDescription parse_scene_spec(std::string_view spec) {
+  const auto fail = [&](const std::string& problem) -> SceneDescription {
+    throw InvalidInput("scene '" + std::string(spec) + "': " + problem);
+  };
+  SceneDescription description;
+  description.name = std::string(spec);
+  const auto generator = [&](std::string_view name) {
+    return spec == name || (spec.size() > name.size() && spec.substr(0, name.size()) == name &&
+                            spec[name.size()] == ':');
+  };
+  if (generator("cloth")) {
+    description.source = SceneSource::cloth;
+    if (spec.size() > 5) {
+      const std::string_view sizes = spec.substr(6);
+      std::size_t both[2] = {0, 0};
+      if (parse_sizes(sizes, both, 2)) {
+      } else if (parse_sizes(sizes, both, 1)) {
+        both[1] = both[0];
+      } else {
+        return fail("expected cloth:N or cloth:CxR with vertex counts, e.g. cloth:256x256");
+      }
+      if (both[0] < 2 || both[1] < 2) return fail("a cloth needs at least 2 vertices per side");
+      if (both[0] * both[1] > std::size_t(1) << 31) return fail("more than 2^31 vertices");
+      description.cloth_columns = both[0];
+      description.cloth_rows = both[1];
+    }
+    return description;
+  }
+  if (generator("bar")) {
+    description.source = SceneSource::bar;
+    if (spec.size() > 3) {
+      std::size_t cells[3] = {0, 0, 0};
+      if (!parse_sizes(spec.substr(4), cells, 3))
+        return fail("expected bar:XxYxZ with cell counts, e.g. bar:10x10x80");
+      if (cells[0] < 1 || cells[1] < 1 || cells[2] < 1) return fail("a bar needs at least 1 cell per side");
+      if ((cells[0] + 1) * (cells[1] + 1) * (cells[2] + 1) > std::size_t(1) << 31)
+        return fail("more than 2^31 vertices");
+      description.bar_cells = {cells[0], cells[1], cells[2]};
+    }
+    return description;
+  }
+  if (spec.empty()) return fail("empty");
+  const std::filesystem::path path{std::string(spec)};
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  if (extension == ".json") return read_scene_file(path);
+  description.source = SceneSource::mesh;
+  description.mesh_file = path;
+  return description;
+}
+
+SceneDescription read_scene_file(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InvalidInput(file.string() + ": cannot open the scene file");
+  SceneDescription description = parse_scene_json(in, file.string(), file.parent_path());
+  if (description.name.empty()) description.name = file.string();
+  return description;
+}
+
+SceneDescription parse_scene_json(std::istream& in, const std::string& name,
+                                  const std::filesystem::path& base) {
+  Json json;
+  try {
+    json = Json::parse(in, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+  } catch (const Json::parse_error& error) {
+    // "[json.exception.parse_error.101] parse error at line 3, column 14: syntax error ..."
+    std::string message = error.what();
+    const std::size_t at = message.find(" at line ");
+    if (at != std::string::npos) {
+      message = message.substr(at + 4);
+    } else if (const std::size_t bracket = message.find("] "); bracket != std::string::npos) {
+      message = message.substr(bracket + 2);
+    }
+    std::replace(message.begin(), message.end(), '\n', ' ');
+    throw InvalidInput(name + ": " + message);
+  }
+  return describe(json, name, base);
+}
+
+std::vector<VertexIndex> boundary_triangles(std::span<const VertexIndex> tetrahedra) {
+  if (tetrahedra.size() % 4 != 0)
+    throw InvalidInput("boundary_triangles: " + std::to_string(tetrahedra.size()) +
+                       " indices are not a whole number of tetrahedra");
+  // Faces opposite vertex d, c, b, a, each oriented outwards for a positive tetrahedron.
+  constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  const std::size_t face_count = tetrahedra.size();  // 4 per tetrahedron
+  struct Face {
+    std::array<VertexIndex, 3> key;
+    std::size_t index;
+  };
+  std::vector<Face> faces(face_count);
+  for (std::size_t f = 0; f < face_count; ++f) {
+    const VertexIndex* tet = tetrahedra.data() + (f / 4) * 4;
+    std::array<VertexIndex, 3> key = {tet[kFaces[f % 4][0]], tet[kFaces[f % 4][1]],
+                                      tet[kFaces[f % 4][2]]};
+    std::sort(key.begin(), key.end());
+    faces[f] = {key, f};
+  }
+  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
+    return a.key != b.key ? a.key < b.key : a.index < b.index;
+  });
+  std::vector<bool> on_boundary(face_count, false);
+  for (std::size_t i = 0; i < face_count;) {
+    std::size_t j = i + 1;
+    while (j < face_count && faces[j].key == faces[i].key) ++j;
+    if (j == i + 1) on_boundary[faces[i].index] = true;
+    i = j;
+  }
+  std::vector<VertexIndex> triangles;
+  for (std::size_t f = 0; f < face_count; ++f)
+    if (on_boundary[f]) {
+      const VertexIndex* tet = tetrahedra.data() + (f / 4) * 4;
+      for (int k = 0; k < 3; ++k) triangles.push_back(tet[kFaces[f % 4][k]]);
+    }
+  return triangles;
+}
+
+Scene build_scene(const SceneDescription& description) {
+  Scene scene;
+  scene.description = description;
+  Mesh& mesh = scene.mesh;
+  std::vector<VertexIndex> default_pins;
+  switch (description.source) {
+    case SceneSource::cloth: {
+      const std::size_t columns = description.cloth_columns, rows = description.cloth_rows;
+      ClothGrid grid = make_cloth_grid(columns, rows, Real(1) / Real(std::max<std::size_t>(columns, 2) - 1));
+      for (Vector3r& p : grid.positions) p = Vector3r(p.x(), 0, p.y());
+      mesh.positions = std::move(grid.positions);
+      mesh.triangles = std::move(grid.triangle_indices);
+      default_pins = {VertexIndex((rows - 1) * columns), VertexIndex(rows * columns - 1)};
+      break;
+    }
+    case SceneSource::bar: {
+      TetrahedralBar bar = make_tetrahedral_bar(description.bar_cells[0], description.bar_cells[1],
+                                                description.bar_cells[2], Real(0.1));
+      for (std::size_t v = 0; v < bar.vertex_count(); ++v)
+        if (bar.positions[v].z() == 0) default_pins.push_back(VertexIndex(v));
+      mesh.positions = std::move(bar.positions);
+      mesh.tetrahedra = std::move(bar.tetrahedron_indices);
+      break;
+    }
+    case SceneSource::mesh: {
+      mesh = read_mesh(description.mesh_file);
+      if (mesh.tetrahedra.empty() && mesh.triangles.empty())
+        throw InvalidInput(description.mesh_file.string() + ": the mesh has no triangles and no tetrahedra");
+      PinRule rule;
+      rule.kind = mesh.tetrahedra.empty() ? PinRule::Kind::highest : PinRule::Kind::lowest;
+      default_pins = pins_of(rule, mesh.positions, {});
+      break;
+    }
+  }
+  scene.pinned = pins_of(description.pins, mesh.positions, std::move(default_pins));
+  if (!mesh.tetrahedra.empty()) {
+    mesh.triangles.clear();  // a solid's own triangles (TetGen .face, Gmsh surfaces) are not simulated
+    scene.model = make_solid(mesh.positions, mesh.tetrahedra, scene.pinned, description.solid);
+    scene.surface_triangles = boundary_triangles(mesh.tetrahedra);
+  } else {
+    scene.model = make_shell(mesh.positions, mesh.triangles, scene.pinned, description.shell);
+    scene.surface_triangles = mesh.triangles;
+  }
+  return scene;
+}
+
+}  // namespace tessera::io

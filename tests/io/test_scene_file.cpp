@@ -1,0 +1,225 @@
+// Scene specs, JSON scene files and build_scene: every spec form, every key, the errors a
+// typo or a bad value gives, and the models built from generators and mesh files.
+#include <tessera/io/scene_file.hpp>
+
+#include <algorithm>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include <tessera/core/error.hpp>
+
+namespace tessera::io {
+namespace {
+
+SceneDescription from_json(const std::string& text) {
+  std::istringstream in(text);
+  return parse_scene_json(in, "scene.json", "/scenes");
+}
+
+std::string json_error(const std::string& text) {
+  try {
+    from_json(text);
+  } catch (const InvalidInput& error) {
+    return error.what();
+  }
+  return "no error";
+}
+
+std::string spec_error(const std::string& spec) {
+  try {
+    parse_scene_spec(spec);
+  } catch (const InvalidInput& error) {
+    return error.what();
+  }
+  return "no error";
+}
+
+TEST(SceneSpec, GeneratorsWithAndWithoutSizes) {
+  SceneDescription cloth = parse_scene_spec("cloth");
+  EXPECT_EQ(cloth.source, SceneSource::cloth);
+  EXPECT_EQ(cloth.cloth_columns, 64u);
+  cloth = parse_scene_spec("cloth:33");
+  EXPECT_EQ(cloth.cloth_columns, 33u);
+  EXPECT_EQ(cloth.cloth_rows, 33u);
+  cloth = parse_scene_spec("cloth:20x7");
+  EXPECT_EQ(cloth.cloth_columns, 20u);
+  EXPECT_EQ(cloth.cloth_rows, 7u);
+  EXPECT_EQ(cloth.name, "cloth:20x7");
+  const SceneDescription bar = parse_scene_spec("bar:2x3x4");
+  EXPECT_EQ(bar.source, SceneSource::bar);
+  EXPECT_EQ(bar.bar_cells, (std::array<std::size_t, 3>{2, 3, 4}));
+  const SceneDescription mesh = parse_scene_spec("meshes/sheet.OBJ");
+  EXPECT_EQ(mesh.source, SceneSource::mesh);
+  EXPECT_EQ(mesh.mesh_file, "meshes/sheet.OBJ");
+}
+
+TEST(SceneSpec, BadSizesNameTheSpec) {
+  EXPECT_EQ(spec_error("cloth:1x5"), "scene 'cloth:1x5': a cloth needs at least 2 vertices per side");
+  EXPECT_EQ(spec_error("cloth:axb"),
+            "scene 'cloth:axb': expected cloth:N or cloth:CxR with vertex counts, e.g. cloth:256x256");
+  EXPECT_EQ(spec_error("cloth:5x"),
+            "scene 'cloth:5x': expected cloth:N or cloth:CxR with vertex counts, e.g. cloth:256x256");
+  EXPECT_EQ(spec_error("bar:0x1x1"), "scene 'bar:0x1x1': a bar needs at least 1 cell per side");
+  EXPECT_EQ(spec_error("bar:2x2"),
+            "scene 'bar:2x2': expected bar:XxYxZ with cell counts, e.g. bar:10x10x80");
+  EXPECT_EQ(spec_error("cloth:100000x100000"), "scene 'cloth:100000x100000': more than 2^31 vertices");
+  EXPECT_EQ(spec_error(""), "scene '': empty");
+  EXPECT_EQ(spec_error("missing.json"), "missing.json: cannot open the scene file");
+}
+
+TEST(SceneFile, EveryKey) {
+  const SceneDescription scene = from_json(R"({
+    // comments are allowed
+    "name": "sheet", "mesh": "sheet.obj", "pins": [0, 3],
+    "shell": {"material": "fem_triangle", "bending": "isometric", "distance_compliance": 1e-6,
+              "bending_compliance": 0.5, "youngs_modulus": 200, "poisson_ratio": 0.25, "mass": 2},
+    "solid": {"material": "volume_and_distance", "youngs_modulus": 3e5, "poisson_ratio": 0,
+              "volume_compliance": 1e-7, "distance_compliance": 1e-8, "mass": 4},
+    "gravity": [0, 0, -1], "time_step": 0.01, "substeps": 3, "iterations": 7, "frames": 0,
+    "velocity_damping": 0.5, "strategy": "dsatur", "mode": "hybrid", "threads": 2})");
+  EXPECT_EQ(scene.name, "sheet");
+  EXPECT_EQ(scene.source, SceneSource::mesh);
+  EXPECT_EQ(scene.mesh_file, std::filesystem::path("/scenes/sheet.obj"));
+  EXPECT_EQ(scene.pins.kind, PinRule::Kind::list);
+  EXPECT_EQ(scene.pins.vertices, (std::vector<VertexIndex>{0, 3}));
+  EXPECT_EQ(scene.shell.material, ShellMaterial::fem_triangle);
+  EXPECT_EQ(scene.shell.bending, ShellBending::isometric);
+  EXPECT_FLOAT_EQ(scene.shell.distance_compliance, 1e-6f);
+  EXPECT_FLOAT_EQ(scene.shell.bending_compliance, 0.5f);
+  EXPECT_FLOAT_EQ(scene.shell.youngs_modulus, 200);
+  EXPECT_FLOAT_EQ(scene.shell.poisson_ratio, 0.25f);
+  EXPECT_FLOAT_EQ(scene.shell.mass, 2);
+  EXPECT_EQ(scene.solid.material, SolidMaterial::volume_and_distance);
+  EXPECT_FLOAT_EQ(scene.solid.youngs_modulus, 3e5f);
+  EXPECT_FLOAT_EQ(scene.solid.poisson_ratio, 0);
+  EXPECT_FLOAT_EQ(scene.solid.volume_compliance, 1e-7f);
+  EXPECT_FLOAT_EQ(scene.solid.distance_compliance, 1e-8f);
+  EXPECT_FLOAT_EQ(scene.solid.mass, 4);
+  EXPECT_EQ(scene.simulation.gravity, Vector3r(0, 0, -1));
+  EXPECT_FLOAT_EQ(scene.simulation.time_step, 0.01f);
+  EXPECT_EQ(scene.simulation.substeps, 3u);
+  EXPECT_EQ(scene.simulation.iterations, 7u);
+  EXPECT_EQ(scene.simulation.frames, 0u);
+  EXPECT_FLOAT_EQ(scene.simulation.velocity_damping, 0.5f);
+  EXPECT_EQ(scene.simulation.strategy, "dsatur");
+  EXPECT_EQ(scene.simulation.mode, "hybrid");
+  EXPECT_EQ(scene.simulation.threads, 2u);
+}
+
+TEST(SceneFile, GeneratorAndPinRule) {
+  const SceneDescription scene = from_json(R"({"generator": "bar:1x2x3", "pins": "highest-z"})");
+  EXPECT_EQ(scene.source, SceneSource::bar);
+  EXPECT_EQ(scene.bar_cells, (std::array<std::size_t, 3>{1, 2, 3}));
+  EXPECT_EQ(scene.pins.kind, PinRule::Kind::highest);
+  EXPECT_EQ(scene.pins.axis, 2u);
+  EXPECT_EQ(scene.name, "bar:1x2x3");
+  EXPECT_EQ(scene.simulation.substeps, SimulationSettings{}.substeps);
+}
+
+TEST(SceneFile, ErrorsNameTheKeyOrTheLine) {
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "substep": 3})"), "scene.json: unknown key 'substep'");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "shell": {"stiffness": 1}})"),
+            "scene.json: unknown key 'shell.stiffness'");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "substeps": -2})"),
+            "scene.json: 'substeps' must be a positive integer, not -2");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "substeps": 0})"),
+            "scene.json: 'substeps' must be a positive integer up to 2^31, not 0");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "time_step": "fast"})"),
+            "scene.json: 'time_step' must be a number in (0, inf), not \"fast\"");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "shell": {"poisson_ratio": 0.5}})"),
+            "scene.json: 'shell.poisson_ratio' must be a number in [0, 0.5), not 0.5");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "shell": {"bending": "soft"}})"),
+            "scene.json: 'shell.bending' must be one of dihedral, isometric, none, not \"soft\"");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "gravity": [0, 1]})"),
+            "scene.json: 'gravity' must be an array of 3 finite numbers, not [0,1]");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "pins": [1, -1]})"),
+            "scene.json: 'pins'[1] must be a vertex number, not -1");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "pins": "left"})"),
+            "scene.json: 'pins': unknown pin rule 'left' (known: default, none, lowest-x, "
+            "lowest-y, lowest-z, highest-x, highest-y, highest-z)");
+  EXPECT_EQ(json_error(R"({"generator": "sphere"})"),
+            "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"bar\" or \"bar:XxYxZ\", not \"sphere\"");
+  EXPECT_EQ(json_error(R"({"generator": "cloth:1"})"),
+            "scene.json: 'generator': scene 'cloth:1': a cloth needs at least 2 vertices per side");
+  EXPECT_EQ(json_error(R"({"frames": 3})"),
+            "scene.json: the scene needs exactly one of 'generator' (e.g. \"cloth:128x128\") and 'mesh' (a file)");
+  EXPECT_EQ(json_error(R"([1, 2])"), "scene.json: the scene must be an object");
+  EXPECT_EQ(json_error("{\n  \"generator\": \"cloth\",\n  \"frames\": 3,,\n}"),
+            "scene.json: line 3, column 15: syntax error while parsing object key - unexpected ','; "
+            "expected string literal");
+  EXPECT_EQ(json_error(""), "scene.json: line 1, column 1: syntax error while parsing value - "
+                            "unexpected end of input; expected '[', '{', or a literal");
+}
+
+TEST(BuildScene, ClothHangsFromTwoCornersByDefault) {
+  const Scene scene = build_scene(parse_scene_spec("cloth:5x4"));
+  EXPECT_EQ(scene.model.particles.size(), 20u);
+  EXPECT_EQ(scene.pinned, (std::vector<VertexIndex>{15, 19}));
+  EXPECT_EQ(scene.surface_triangles.size(), 4u * 3u * 2u * 3u);
+  EXPECT_GT(scene.model.constraints.distance.size(), 0u);
+  EXPECT_GT(scene.model.constraints.dihedral.size(), 0u);
+  for (std::size_t p = 0; p < 20; ++p)
+    EXPECT_EQ(scene.model.particles.inverse_mass[p] == 0, p == 15 || p == 19) << p;
+}
+
+TEST(BuildScene, PinRulesAndMaterials) {
+  SceneDescription description = parse_scene_spec("bar:1x1x2");
+  description.pins = parse_pin_rule("highest-z");
+  description.solid.material = SolidMaterial::strain_tetra;
+  const Scene bar = build_scene(description);
+  EXPECT_EQ(bar.pinned.size(), 4u);
+  for (VertexIndex v : bar.pinned) EXPECT_FLOAT_EQ(bar.mesh.positions[v].z(), Real(0.2));
+  EXPECT_EQ(bar.model.constraints.strain_tetra.size(), 12u);
+  EXPECT_EQ(bar.model.constraints.fem_tetra.size(), 0u);
+  // 2 cells of 2 × 2 triangles on each of the 4 long sides, 2 triangles on each end.
+  EXPECT_EQ(bar.surface_triangles.size() / 3, 4u * 4u + 2u * 2u);
+
+  description.pins = parse_pin_rule("none");
+  EXPECT_TRUE(build_scene(description).pinned.empty());
+  description.pins.kind = PinRule::Kind::list;
+  description.pins.vertices = {0, 99};
+  try {
+    build_scene(description);
+    FAIL() << "expected InvalidInput";
+  } catch (const InvalidInput& error) {
+    EXPECT_STREQ(error.what(), "pins: vertex 99 is out of range (the scene has 12 vertices)");
+  }
+}
+
+TEST(BuildScene, MeshFilesBecomeShellsAndSolids) {
+  const std::filesystem::path data = TESSERA_TEST_DATA_DIR;
+  const Scene square = build_scene(parse_scene_spec((data / "square.obj").string()));
+  EXPECT_EQ(square.model.constraints.distance.size(), 5u);
+  EXPECT_EQ(square.pinned, (std::vector<VertexIndex>{2, 3}));  // highest y hangs the sheet
+  const Scene cube = build_scene(parse_scene_spec((data / "cube.node").string()));
+  EXPECT_GT(cube.model.constraints.fem_tetra.size(), 0u);
+  EXPECT_TRUE(cube.mesh.triangles.empty());
+  EXPECT_FALSE(cube.surface_triangles.empty());
+  for (VertexIndex v : cube.pinned)  // stands on its lowest vertices
+    EXPECT_FLOAT_EQ(cube.mesh.positions[v].y(), cube.mesh.positions[cube.pinned[0]].y());
+  EXPECT_THROW(build_scene(parse_scene_spec((data / "missing.obj").string())), InvalidInput);
+}
+
+TEST(BoundaryTriangles, OneTetrahedronFacesOutwards) {
+  const std::vector<Vector3r> x = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const std::vector<VertexIndex> tet = {0, 1, 2, 3};
+  const std::vector<VertexIndex> faces = boundary_triangles(tet);
+  ASSERT_EQ(faces.size(), 12u);
+  const Vector3r centre = (x[0] + x[1] + x[2] + x[3]) / 4;
+  for (std::size_t f = 0; f < 4; ++f) {
+    const Vector3r a = x[faces[3 * f]], b = x[faces[3 * f + 1]], c = x[faces[3 * f + 2]];
+    EXPECT_GT((b - a).cross(c - a).dot((a + b + c) / 3 - centre), 0) << "face " << f;
+  }
+  EXPECT_THROW(boundary_triangles(std::vector<VertexIndex>{0, 1, 2}), InvalidInput);
+}
+
+TEST(BoundaryTriangles, SharedFacesAreInside) {
+  const TetrahedralBar bar = make_tetrahedral_bar(2, 3, 4);
+  const std::vector<VertexIndex> faces = boundary_triangles(bar.tetrahedron_indices);
+  // Each of the box's unit squares on its surface is split into 2 triangles.
+  EXPECT_EQ(faces.size() / 3, 2u * 2u * (2 * 3 + 3 * 4 + 2 * 4));
+}
+
+}  // namespace
+}  // namespace tessera::io

@@ -178,6 +178,10 @@ TEST_F(Cli, RunsMeshFilesAndSceneFiles) {
   EXPECT_EQ(summary["substeps"], 3);
   EXPECT_EQ(summary["mode"], "hybrid");
   EXPECT_EQ(summary["strategy"], "dsatur");
+  const Json curtain = run_json({"run", std::string(TESSERA_SOURCE_DIR) + "/examples/scenes/curtain.json",
+                                 "--frames", "2"});
+  EXPECT_EQ(curtain["scene"], "curtain");
+  EXPECT_EQ(curtain["pinned"], 3);
   // The command line overrides the file.
   EXPECT_EQ(run_json({"run", scene.string(), "--frames", "1", "--mode", "gs"})["frames"], 1);
 }

@@ -15,6 +15,7 @@
 #include <tessera/core/error.hpp>
 
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "summary.hpp"
 
 namespace tessera::cli {
@@ -28,7 +29,7 @@ CLI::App* add_color_command(CLI::App& app, ColorOptions& options) {
   command->add_option("--threads", options.threads,
                       "worker threads (default: every hardware thread; the colouring is the same "
                       "for any count)")
-      ->check(CLI::Range(std::size_t(1), std::size_t(4096)));
+      ->check(integer_from(1, 4096));
   command->add_option("--seed", options.seed, "seed of the randomised strategies")
       ->capture_default_str();
   command->add_flag("--balance", options.balance, "run the balance pass after each strategy");

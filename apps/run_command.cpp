@@ -18,6 +18,7 @@
 
 #include "commands.hpp"
 #include "frame_output.hpp"
+#include "option_checks.hpp"
 #include "progress_bar.hpp"
 #include "summary.hpp"
 
@@ -58,25 +59,17 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
       "run", "Simulate a scene and print a summary (with no SCENE: the default cloth)");
   add_scene_options(*command, options.scene);
   command->add_option("--frames", options.frames, "time steps to simulate (default 60)")
-      ->check(CLI::Range(std::size_t(0), std::size_t(1) << 31));
+      ->check(integer_from(0, std::size_t(1) << 31));
   command->add_option("--substeps", options.substeps, "substeps per frame (default 16)")
-      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 20));
+      ->check(integer_from(1, std::size_t(1) << 20));
   command->add_option("--iterations", options.iterations, "projection sweeps per substep (default 2)")
-      ->check(CLI::Range(std::size_t(1), std::size_t(1) << 20));
+      ->check(integer_from(1, std::size_t(1) << 20));
   command->add_option("--dt", options.time_step, "seconds per frame (default 1/60)")
-      ->check(CLI::Validator(
-          [](std::string& text) -> std::string {
-            char* end = nullptr;
-            const double value = std::strtod(text.c_str(), &end);
-            if (end == text.c_str() || *end != '\0' || !std::isfinite(value) || !(value > 0))
-              return "must be a positive finite number of seconds, not '" + text + "'";
-            return {};
-          },
-          "SECONDS"));
+      ->check(finite_number_above(0, false, "seconds"));
   command->add_option("--damping", options.velocity_damping, "velocity damping per second (default 0)")
-      ->check(CLI::Range(0.0, 1e6));
+      ->check(finite_number_above(0, true, "1/seconds"));
   command->add_option("--threads", options.threads, "worker threads (default: every hardware thread)")
-      ->check(CLI::Range(std::size_t(1), std::size_t(4096)));
+      ->check(integer_from(1, 4096));
   command->add_option("--strategy", options.strategy,
                       "colouring strategy (default stencil; `tessera info` lists them)");
   command->add_option("--mode", options.mode, "gs, jacobi, hybrid or sequential (default gs)");

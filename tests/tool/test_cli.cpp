@@ -318,9 +318,9 @@ TEST_F(Cli, ErrorMessagesSayWhatIsWrong) {
   EXPECT_EQ(run({"run", "--mode", "fast"}).err,
             "tessera run: unknown solver mode 'fast' (known: gs, jacobi, hybrid, sequential)\n");
   EXPECT_EQ(run({"run", "--threads", "0"}).err,
-            "tessera run: --threads: Value 0 not in range 1 to 4096\n");
+            "tessera run: --threads: must be an integer from 1 to 4096, not '0'\n");
   EXPECT_EQ(run({"run", "--dt", "0"}).err,
-            "tessera run: --dt: must be a positive finite number of seconds, not '0'\n");
+            "tessera run: --dt: must be a finite number of seconds above 0, not '0'\n");
   EXPECT_EQ(run({"bogus"}).err, "tessera: unknown subcommand 'bogus' (known: run, color, info)\n");
   EXPECT_EQ(run({"run", "cloth:1x5"}).err,
             "tessera run: scene 'cloth:1x5': a cloth needs at least 2 vertices per side\n");

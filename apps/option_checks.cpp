@@ -1,0 +1,41 @@
+#include "option_checks.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+
+namespace tessera::cli {
+
+CLI::Validator integer_from(std::size_t low, std::size_t high) {
+  const std::string wanted = "must be an integer from " + std::to_string(low) + " to " + std::to_string(high);
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        const bool digits = !text.empty() && text.size() <= 19 &&
+                            text.find_first_not_of("0123456789") == std::string::npos;
+        if (!digits) return wanted + ", not '" + text + "'";
+        const unsigned long long value = std::strtoull(text.c_str(), nullptr, 10);
+        if (value < low || value > high) return wanted + ", not '" + text + "'";
+        return {};
+      },
+      "INT");
+}
+
+CLI::Validator finite_number_above(double low, bool low_inclusive, const std::string& unit) {
+  std::string wanted = "must be a finite number of " + unit;
+  const bool zero = low == 0;
+  wanted += zero ? (low_inclusive ? " (0 or more)" : " above 0")
+                 : (low_inclusive ? " of at least " : " above ") + std::to_string(low);
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        char* end = nullptr;
+        errno = 0;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = end != text.c_str() && *end == '\0' && errno == 0 && std::isfinite(value);
+        if (!number || !(low_inclusive ? value >= low : value > low))
+          return wanted + ", not '" + text + "'";
+        return {};
+      },
+      "NUMBER");
+}
+
+}  // namespace tessera::cli

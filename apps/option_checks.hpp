@@ -1,0 +1,18 @@
+// Checks of numeric option values with messages that say what is wanted and what was given
+// ("--threads: must be an integer from 1 to 4096, not '0'"), used instead of CLI11's range
+// checks, whose messages print doubles with six decimals and call "abc" out of range.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+namespace tessera::cli {
+
+/// An integer in [low, high].
+CLI::Validator integer_from(std::size_t low, std::size_t high);
+/// A finite number above `low` (or at least `low` when `low_inclusive`), in `unit`.
+CLI::Validator finite_number_above(double low, bool low_inclusive, const std::string& unit);
+
+}  // namespace tessera::cli

@@ -17,23 +17,18 @@ SceneDescription from_json(const std::string& text) {
   return parse_scene_json(in, "scene.json", "/scenes");
 }
 
-std::string json_error(const std::string& text) {
+/// The InvalidInput message `parse` throws, or "no error".
+template <class Parse>
+std::string error_of(Parse&& parse) {
   try {
-    from_json(text);
+    parse();
   } catch (const InvalidInput& error) {
     return error.what();
   }
   return "no error";
 }
-
-std::string spec_error(const std::string& spec) {
-  try {
-    parse_scene_spec(spec);
-  } catch (const InvalidInput& error) {
-    return error.what();
-  }
-  return "no error";
-}
+std::string json_error(const std::string& text) { return error_of([&] { from_json(text); }); }
+std::string spec_error(const std::string& spec) { return error_of([&] { parse_scene_spec(spec); }); }
 
 TEST(SceneSpec, GeneratorsWithAndWithoutSizes) {
   SceneDescription cloth = parse_scene_spec("cloth");

@@ -419,22 +419,6 @@ class ColourBalancer {
   std::size_t smallest_ = 0, largest_ = 0;
 };
 
-/// The constraints in schedule order, but whole colours by decreasing size (ties by colour):
-/// moves out of the largest colours are the ones that pay most, so they get the work budget
-/// first.
-std::vector<ConstraintIndex> largest_colours_first(const Colouring& colouring) {
-  std::vector<Colour> order(colouring.colour_count());
-  std::iota(order.begin(), order.end(), Colour(0));
-  std::stable_sort(order.begin(), order.end(), [&](Colour x, Colour y) {
-    return colouring.colour_size(x) > colouring.colour_size(y);
-  });
-  std::vector<ConstraintIndex> constraints;
-  constraints.reserve(colouring.constraint_count());
-  for (Colour k : order)
-    for (ConstraintIndex c : colouring.constraints_of(k)) constraints.push_back(c);
-  return constraints;
-}
-
 }  // namespace
 
 Colouring balance_colours(const ConstraintGraph& graph, const Colouring& colouring) {

@@ -222,61 +222,116 @@ class SizeChanges {
 /// The balance pass (see the file comment): direct moves and ejections, sweep after sweep.
 class ColourBalancer {
   // Work bounds: sweeps; ejection candidates tried per constraint and per constraint of the
-  // graph in all (an ejection try that finds nothing costs one); a sweep moving fewer than
-  // 1/kStallFraction of the constraints ends the pass.
+  // graph in all (an ejection try that finds nothing costs one); a sweep, or a 1/16 block of a
+  // sweep, moving fewer than 1/kStallFraction of its constraints ends the pass.
   static constexpr int kMaximumSweeps = 16;
   static constexpr std::size_t kEvaluationsPerTry = 64;
   static constexpr std::size_t kEvaluationsPerConstraint = 16;
   static constexpr std::size_t kStallFraction = 1000;
+  static constexpr std::size_t kBlocksPerSweep = 16;
   static constexpr std::size_t kOwnerEntriesPerIncidence = 8;
 
  public:
-  ColourBalancer(const ConstraintGraph& graph, std::vector<Colour>& colours, std::size_t count)
-      : graph_(graph), colours_(colours), count_(count),
-        masks_(ParticleColourMasks::of(graph, colours, count)), sizes_(count, 0),
-        changes_(sizes_) {
-    for (Colour k : colours_) ++sizes_[k];
+  /// Works on a private copy of the constraints' particle lists, renumbered by smallest
+  /// particle, so that neighbouring constraints sit together in memory whatever the input
+  /// order (on a shuffled cloth the pass is otherwise bound by cache misses).
+  ColourBalancer(const ConstraintGraph& graph, std::span<const Colour> colours, std::size_t count)
+      : count_(count), masks_(graph.particle_count(), count), sizes_(count, 0), changes_(sizes_) {
+    const std::size_t total = colours.size();
+    {
+      std::vector<std::uint32_t> start(graph.particle_count() + 2, 0);
+      std::vector<ParticleIndex> first(total, 0);
+      for (std::size_t c = 0; c < total; ++c) {
+        const auto particles = graph.particles_of(static_cast<ConstraintIndex>(c));
+        if (!particles.empty()) first[c] = *std::min_element(particles.begin(), particles.end());
+        ++start[first[c] + 1];
+      }
+      std::partial_sum(start.begin(), start.end(), start.begin());
+      original_.resize(total);
+      for (std::size_t c = 0; c < total; ++c) original_[start[first[c]]++] = static_cast<ConstraintIndex>(c);
+    }
+    offsets_.reserve(total + 1);
+    offsets_.push_back(0);
+    particles_.reserve(graph.incidence_count());
+    colours_.resize(total);
+    for (std::size_t i = 0; i < total; ++i) {
+      const auto particles = graph.particles_of(original_[i]);
+      particles_.insert(particles_.end(), particles.begin(), particles.end());
+      offsets_.push_back(static_cast<std::uint32_t>(particles_.size()));
+      colours_[i] = colours[original_[i]];
+      masks_.take(particles, colours_[i]);
+      ++sizes_[colours_[i]];
+    }
     // The owner table costs particles × colours entries: only when that is within a few
     // times the graph itself (colourings with thousands of colours get direct moves only).
     ejections_ = graph.particle_count() * count <= kOwnerEntriesPerIncidence * graph.incidence_count() + 1024;
     if (ejections_) {
       owner_.assign(graph.particle_count() * count, kNone);
-      for (std::size_t c = 0; c < colours_.size(); ++c)
-        for (ParticleIndex p : graph.particles_of(static_cast<ConstraintIndex>(c)))
-          owner_[std::size_t(p) * count_ + colours_[c]] = static_cast<ConstraintIndex>(c);
+      for (std::size_t i = 0; i < total; ++i)
+        for (ParticleIndex p : particles_of(static_cast<ConstraintIndex>(i)))
+          owner_[std::size_t(p) * count_ + colours_[i]] = static_cast<ConstraintIndex>(i);
     }
     std::size_t widest = 1;
-    for (std::size_t c = 0; c < colours_.size(); ++c)
-      widest = std::max(widest, graph.particles_of(static_cast<ConstraintIndex>(c)).size());
+    for (std::size_t i = 0; i < total; ++i) widest = std::max<std::size_t>(widest, offsets_[i + 1] - offsets_[i]);
     ejected_.resize(widest);
+    destination_.resize(widest);
     receivers_.resize(masks_.words());
     all_colours_.assign(masks_.words(), 0);
     for (std::size_t k = 0; k < count_; ++k) all_colours_[k / 64] |= std::uint64_t(1) << (k % 64);
-    destination_.resize(widest);
     // Good enough: largest − smallest within 0.5 % of the mean (and at least 1).
-    tolerance_ = std::max<std::size_t>(1, colours_.size() / count_ / 200);
-    evaluations_left_ = kEvaluationsPerConstraint * colours_.size();
+    tolerance_ = std::max<std::size_t>(1, total / count_ / 200);
+    evaluations_left_ = kEvaluationsPerConstraint * total;
   }
 
-  void run(std::span<const ConstraintIndex> order) {
+  /// Sweeps colour by colour (as the schedule does), each colour's constraints by smallest
+  /// particle.
+  void run() {
+    std::vector<std::uint32_t> start(count_ + 1, 0);
+    for (Colour k : colours_) ++start[k + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<ConstraintIndex> order(colours_.size());
+    for (std::size_t i = 0; i < colours_.size(); ++i) order[start[colours_[i]]++] = static_cast<ConstraintIndex>(i);
+    sweep(order);
+  }
+
+  /// Writes the balanced colour of every constraint (input numbering).
+  void write(std::span<Colour> colours) const {
+    for (std::size_t i = 0; i < colours_.size(); ++i) colours[original_[i]] = colours_[i];
+  }
+
+ private:
+  std::span<const ParticleIndex> particles_of(ConstraintIndex i) const {
+    return {particles_.data() + offsets_[i], particles_.data() + offsets_[i + 1]};
+  }
+
+  void sweep(std::span<const ConstraintIndex> order) {
+    // Progress is checked per block of constraints as well as per sweep, so a pass with
+    // nothing to do (e.g. sizes forced at the lower bound) stops after a small part of a sweep.
+    const std::size_t block = std::max<std::size_t>(order.size() / kBlocksPerSweep, 4096);
     refresh_extremes();
     for (int sweep = 0; sweep < kMaximumSweeps && !balanced() && evaluations_left_ > 0; ++sweep) {
-      std::size_t moved = 0, visited = 0;
+      std::size_t moved = 0, moved_in_block = 0, visited = 0;
       for (ConstraintIndex c : order) {
-        if ((++visited & 1023) == 0) {
+        ++visited;
+        if (visited % 1024 == 0) {
           refresh_extremes();
-          if (balanced()) break;
+          if (balanced()) return;
         }
-        moved += try_direct_move(c) || try_ejection(c);
+        if (visited % block == 0) {
+          if (moved_in_block * kStallFraction < block) return;
+          moved_in_block = 0;
+        }
+        const bool moved_c = try_direct_move(c) || try_ejection(c);
+        moved += moved_c;
+        moved_in_block += moved_c;
       }
       refresh_extremes();
       // A sweep that moved almost nothing is the sign of a local optimum, often a forced one
       // (at the lower bound colour sizes are fixed by the mesh): stop rather than sweep again.
-      if (moved * kStallFraction < order.size()) break;
+      if (moved * kStallFraction < order.size()) return;
     }
   }
 
- private:
   void refresh_extremes() {
     const auto [lo, hi] = std::minmax_element(sizes_.begin(), sizes_.end());
     smallest_ = *lo;
@@ -319,14 +374,14 @@ class ColourBalancer {
   }
 
   void leave(ConstraintIndex c) {
-    const auto particles = graph_.particles_of(c);
+    const auto particles = particles_of(c);
     masks_.release(particles, colours_[c]);
     if (ejections_)
       for (ParticleIndex p : particles) owner_[std::size_t(p) * count_ + colours_[c]] = kNone;
     --sizes_[colours_[c]];
   }
   void enter(ConstraintIndex c, Colour k) {
-    const auto particles = graph_.particles_of(c);
+    const auto particles = particles_of(c);
     masks_.take(particles, k);
     if (ejections_)
       for (ParticleIndex p : particles) owner_[std::size_t(p) * count_ + k] = c;
@@ -339,7 +394,7 @@ class ColourBalancer {
     const Colour a = colours_[c];
     if (sizes_[a] <= smallest_ + 1) return false;
     changes_.clear();
-    const Colour to = smallest_free(graph_.particles_of(c), a, all_colours_);
+    const Colour to = smallest_free(particles_of(c), a, all_colours_);
     if (to >= count_ || sizes_[to] + 1 >= sizes_[a]) return false;
     leave(c);
     enter(c, to);
@@ -350,7 +405,7 @@ class ColourBalancer {
   /// into the smallest colour then free for it; the first b that lowers Σ size² is taken.
   bool try_ejection(ConstraintIndex c) {
     const Colour a = colours_[c];
-    const auto particles = graph_.particles_of(c);
+    const auto particles = particles_of(c);
     const std::int64_t arity = std::int64_t(particles.size());
     // Nothing can pay off unless c's colour is above the smallest (single ejections) or c can
     // eject several constraints from a large colour.
@@ -384,7 +439,7 @@ class ColourBalancer {
         changes_.add(b, 1 - std::int64_t(ejected));
         bool placed = true;
         for (std::size_t i = 0; i < ejected && placed; ++i) {
-          destination_[i] = smallest_free(graph_.particles_of(ejected_[i]), b, receivers_);
+          destination_[i] = smallest_free(particles_of(ejected_[i]), b, receivers_);
           placed = destination_[i] < count_;
           if (placed) changes_.add(destination_[i], 1);
         }
@@ -402,9 +457,11 @@ class ColourBalancer {
     return moved;
   }
 
-  const ConstraintGraph& graph_;
-  std::vector<Colour>& colours_;
   std::size_t count_;
+  std::vector<ConstraintIndex> original_;  // input id of each constraint of the private copy
+  std::vector<std::uint32_t> offsets_;
+  std::vector<ParticleIndex> particles_;
+  std::vector<Colour> colours_;
   ParticleColourMasks masks_;
   std::vector<std::size_t> sizes_;
   std::vector<ConstraintIndex> owner_;  // owner_[p * count_ + k]: the constraint coloured k at p
@@ -424,7 +481,11 @@ class ColourBalancer {
 Colouring balance_colours(const ConstraintGraph& graph, const Colouring& colouring) {
   const std::size_t count = colouring.colour_count();
   std::vector<Colour> colours(colouring.colours().begin(), colouring.colours().end());
-  if (count >= 2) ColourBalancer(graph, colours, count).run(colouring.constraints_by_colour());
+  if (count >= 2) {
+    ColourBalancer balancer(graph, colours, count);
+    balancer.run();
+    balancer.write(colours);
+  }
   return rebuild(graph, colouring, std::move(colours));
 }
 

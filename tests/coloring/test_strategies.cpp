@@ -172,6 +172,13 @@ TEST(GreedyStrategy, IsExactlyFirstFitInInputOrderAlsoPast64Colours) {
   graphs.push_back(ConstraintGraph(star_masses, star_groups));
   graphs.push_back(test::cloth_graph(30, 20, true));
   graphs.push_back(test::tet_bar_graph(3, 4, 5));
+  // The same star after one unrelated edge: the hand-over happens at an odd constraint.
+  std::vector<ParticleIndex> shifted_star = {101, 102};
+  shifted_star.insert(shifted_star.end(), star.begin(), star.end());
+  const std::vector<Real> shifted_masses(103, Real(1));
+  const std::vector<ConstraintGroup> shifted_groups = {ConstraintGroup::fixed_arity("star", 2, shifted_star)};
+  graphs.push_back(ConstraintGraph(shifted_masses, shifted_groups));
+  for (const test::TestMesh& mesh : meshes()) graphs.push_back(mesh.graph);
   for (const ConstraintGraph& graph : graphs) {
     const Colouring greedy = registry().get("greedy").colour(graph, {});
     const auto expected = reference_first_fit(graph);

@@ -11,22 +11,25 @@
 // moves to a colour free at all its particles, or to a colour blocked by exactly one
 // constraint that itself can move elsewhere.
 //
-// Balancing lowers Σ size² one move at a time (so it cannot cycle), in sweeps over the
-// constraints in schedule order. A constraint c of colour a moves
+// Balancing lowers Σ size² one move at a time (so it cannot cycle), in sweeps colour by
+// colour, each colour's constraints by smallest particle (on a private copy of the particle
+// lists renumbered that way, so memory access stays local whatever the input order). A
+// constraint c of colour a moves
 //  - directly into the smallest colour free at all its particles, when that is at least 2
 //    below a; or
 //  - by ejection into a colour b, taking it from its neighbours coloured b there (at most one
-//    per particle of c: the owner of b at that particle, kept in a particle × colour table), each
-//    of which moves on to the smallest colour then free for it (a included, since c left it);
-//    the first b whose sizes change lowers Σ size² is taken.
+//    per particle of c: the owner of b at that particle, kept in a particle × colour table),
+//    each of which moves on to the smallest colour then free for it (a included, since c left
+//    it); the first b whose size changes lower Σ size² is taken.
 // Ejection is what balances colourings near the lower bound, where almost no colour is free
-// for a constraint: there the large colours are often the "wrong shape" (a colour of edges is a
-// near-perfect matching, a colour of tetrahedra covers nearly every particle), and the useful
-// moves trade one constraint against two or three from a large colour. Work is bounded: a
-// sweep ends early once the largest and smallest colours are within 0.5 % of the mean, the pass
-// ends after a sweep that moves fewer than 0.1 % of the constraints (a local optimum, or a
-// forced one: at the lower bound sizes are often fixed by the mesh), and ejection candidates
-// are capped per constraint and in total.
+// for a constraint: there the large colours are often the "wrong shape" (a colour of edges is
+// a near-perfect matching, a colour of tetrahedra covers nearly every particle), and the
+// useful moves trade one constraint against two or three from a large colour. Work is
+// bounded: the pass ends once the largest and smallest colours are within 0.5 % of the mean,
+// after a sweep that moves fewer than 0.1 % of the constraints or 1/16 of a sweep that moves
+// fewer than 1 % of its constraints (a local optimum, or a forced one: at the lower bound
+// sizes are often fixed by the mesh), and ejection candidates are capped per constraint and
+// in total.
 //
 // Determinism: constraints and colours are scanned in fixed orders and the class shuffles use
 // a hash of (seed, round), so the result depends on the input and the seed only.
@@ -222,12 +225,14 @@ class SizeChanges {
 /// The balance pass (see the file comment): direct moves and ejections, sweep after sweep.
 class ColourBalancer {
   // Work bounds: sweeps; ejection candidates tried per constraint and per constraint of the
-  // graph in all (an ejection try that finds nothing costs one); a sweep, or a 1/16 block of a
-  // sweep, moving fewer than 1/kStallFraction of its constraints ends the pass.
+  // graph in all (an ejection try that finds nothing costs one); a sweep moving fewer than
+  // 1/kStallFraction of the constraints, or a 1/16 block of a sweep fewer than
+  // 1/kBlockStallFraction of its constraints, ends the pass.
   static constexpr int kMaximumSweeps = 16;
   static constexpr std::size_t kEvaluationsPerTry = 64;
   static constexpr std::size_t kEvaluationsPerConstraint = 16;
   static constexpr std::size_t kStallFraction = 1000;
+  static constexpr std::size_t kBlockStallFraction = 100;
   static constexpr std::size_t kBlocksPerSweep = 16;
   static constexpr std::size_t kOwnerEntriesPerIncidence = 8;
 
@@ -318,7 +323,7 @@ class ColourBalancer {
           if (balanced()) return;
         }
         if (visited % block == 0) {
-          if (moved_in_block * kStallFraction < block) return;
+          if (moved_in_block * kBlockStallFraction < block) return;
           moved_in_block = 0;
         }
         const bool moved_c = try_direct_move(c) || try_ejection(c);

@@ -11,12 +11,25 @@
 // moves to a colour free at all its particles, or to a colour blocked by exactly one
 // constraint that itself can move elsewhere.
 //
-// Balancing moves constraints out of colours above the mean: alone, into the smallest colour
-// free for it; by ejection, taking a colour from its single blocker there, which moves on to a
-// small colour free for it; and, when neither is left (typical when the count equals the lower
-// bound), by swapping two colours along a short Kempe chain: the connected set of constraints
-// coloured a or b reachable from it, whose a/b swap keeps the colouring valid. Sweeps, chain
-// lengths and the total neighbourhood scanning are capped, so the pass is a few graph sweeps.
+// Balancing lowers Σ size² one move at a time (so it cannot cycle), in sweeps colour by
+// colour, each colour's constraints by smallest particle (on a private copy of the particle
+// lists renumbered that way, so memory access stays local whatever the input order). A
+// constraint c of colour a moves
+//  - directly into the smallest colour free at all its particles, when that is at least 2
+//    below a; or
+//  - by ejection into a colour b, taking it from its neighbours coloured b there (at most one
+//    per particle of c: the owner of b at that particle, kept in a particle × colour table),
+//    each of which moves on to the smallest colour then free for it (a included, since c left
+//    it); the first b whose size changes lower Σ size² is taken.
+// Ejection is what balances colourings near the lower bound, where almost no colour is free
+// for a constraint: there the large colours are often the "wrong shape" (a colour of edges is
+// a near-perfect matching, a colour of tetrahedra covers nearly every particle), and the
+// useful moves trade one constraint against two or three from a large colour. Work is
+// bounded: the pass ends once the largest and smallest colours are within 0.5 % of the mean,
+// after a sweep that moves fewer than 0.1 % of the constraints or 1/16 of a sweep that moves
+// fewer than 1 % of its constraints (a local optimum, or a forced one: at the lower bound
+// sizes are often fixed by the mesh), and ejection candidates are capped per constraint and
+// in total.
 //
 // Determinism: constraints and colours are scanned in fixed orders and the class shuffles use
 // a hash of (seed, round), so the result depends on the input and the seed only.
@@ -179,181 +192,304 @@ Colouring reduce_colours(const ConstraintGraph& graph, const Colouring& colourin
   return rebuild(graph, colouring, std::move(colours));
 }
 
-Colouring balance_colours(const ConstraintGraph& graph, const Colouring& colouring) {
-  const std::size_t count = colouring.colour_count();
-  std::vector<Colour> colours(colouring.colours().begin(), colouring.colours().end());
-  if (count < 2) return rebuild(graph, colouring, std::move(colours));
-  ParticleColourMasks masks = ParticleColourMasks::of(graph, colours, count);
-  std::vector<std::size_t> sizes(count, 0);
-  for (Colour k : colours) ++sizes[k];
-  const std::size_t target = (colours.size() + count - 1) / count;  // ceil(mean)
+namespace {
 
-  // Kempe exchanges are bounded three ways, so the pass costs a few sweeps of the graph at
-  // most: chains longer than kLongestChain are abandoned, only the kReceivers smallest colours
-  // below the mean are tried as partners, and all chain searches and blocker scans together
-  // visit at most kWorkPerIncidence × incidences (particle-list entries). A chain can only pay
-  // off when the constraint it starts from has a single neighbour in the partner colour (it
-  // starts one a ahead and ends ahead only if few b's join), so that is checked first with one
-  // scan of the constraint's neighbourhood, which is far cheaper than the chain search.
-  constexpr std::size_t kLongestChain = 48;
-  constexpr std::size_t kReceivers = 3;
-  constexpr std::size_t kWorkPerIncidence = 6;
-  constexpr int kMaximumKempePasses = 8;
-  constexpr int kMaximumSweeps = 32;
-  int sweeps = 0;
-  std::size_t work_left = kWorkPerIncidence * std::max<std::size_t>(graph.incidence_count(), 1);
-  std::vector<std::uint32_t> visited(colours.size(), 0);
-  std::uint32_t stamp = 0;
-  std::vector<ConstraintIndex> chain;
-  // Kempe chain of c over colours {a, b}; false when abandoned (too long, or out of work).
-  auto kempe_chain = [&](ConstraintIndex c, Colour a, Colour b) {
-    chain.clear();
-    ++stamp;
-    chain.push_back(c);
-    visited[c] = stamp;
-    for (std::size_t head = 0; head < chain.size(); ++head) {
-      for (ParticleIndex p : graph.particles_of(chain[head])) {
-        const auto around = graph.constraints_of(p);
-        if (around.size() > work_left) return false;
-        work_left -= around.size();
-        for (ConstraintIndex n : around) {
-          if (visited[n] == stamp || (colours[n] != a && colours[n] != b)) continue;
-          if (chain.size() == kLongestChain) return false;
-          visited[n] = stamp;
-          chain.push_back(n);
+/// Sum-of-squares bookkeeping for a tentative move: unit changes to a few colour sizes, and
+/// how much they would change Σ size². Every accepted move lowers Σ size² (an integer), so
+/// the balance pass cannot cycle.
+class SizeChanges {
+ public:
+  explicit SizeChanges(std::span<const std::size_t> sizes) : sizes_(sizes), delta_(sizes.size(), 0) {}
+  void add(Colour k, std::int64_t d) {
+    if (delta_[k] == 0) touched_.push_back(k);
+    delta_[k] += d;
+  }
+  /// Size of k with the pending changes.
+  std::int64_t size(Colour k) const { return std::int64_t(sizes_[k]) + delta_[k]; }
+  std::int64_t square_sum_change() const {
+    std::int64_t change = 0;
+    for (Colour k : touched_) change += delta_[k] * (2 * std::int64_t(sizes_[k]) + delta_[k]);
+    return change;
+  }
+  void clear() {
+    for (Colour k : touched_) delta_[k] = 0;
+    touched_.clear();
+  }
+
+ private:
+  std::span<const std::size_t> sizes_;
+  std::vector<std::int64_t> delta_;
+  std::vector<Colour> touched_;
+};
+
+/// The balance pass (see the file comment): direct moves and ejections, sweep after sweep.
+class ColourBalancer {
+  // Work bounds: sweeps; ejection candidates tried per constraint and per constraint of the
+  // graph in all (an ejection try that finds nothing costs one); a sweep moving fewer than
+  // 1/kStallFraction of the constraints, or a 1/16 block of a sweep fewer than
+  // 1/kBlockStallFraction of its constraints, ends the pass.
+  static constexpr int kMaximumSweeps = 16;
+  static constexpr std::size_t kEvaluationsPerTry = 64;
+  static constexpr std::size_t kEvaluationsPerConstraint = 16;
+  static constexpr std::size_t kStallFraction = 1000;
+  static constexpr std::size_t kBlockStallFraction = 100;
+  static constexpr std::size_t kBlocksPerSweep = 16;
+  static constexpr std::size_t kOwnerEntriesPerIncidence = 8;
+
+ public:
+  /// Works on a private copy of the constraints' particle lists, renumbered by smallest
+  /// particle, so that neighbouring constraints sit together in memory whatever the input
+  /// order (on a shuffled cloth the pass is otherwise bound by cache misses).
+  ColourBalancer(const ConstraintGraph& graph, std::span<const Colour> colours, std::size_t count)
+      : count_(count), masks_(graph.particle_count(), count), sizes_(count, 0), changes_(sizes_) {
+    const std::size_t total = colours.size();
+    {
+      std::vector<std::uint32_t> start(graph.particle_count() + 2, 0);
+      std::vector<ParticleIndex> first(total, 0);
+      for (std::size_t c = 0; c < total; ++c) {
+        const auto particles = graph.particles_of(static_cast<ConstraintIndex>(c));
+        if (!particles.empty()) first[c] = *std::min_element(particles.begin(), particles.end());
+        ++start[first[c] + 1];
+      }
+      std::partial_sum(start.begin(), start.end(), start.begin());
+      original_.resize(total);
+      for (std::size_t c = 0; c < total; ++c) original_[start[first[c]]++] = static_cast<ConstraintIndex>(c);
+    }
+    offsets_.reserve(total + 1);
+    offsets_.push_back(0);
+    particles_.reserve(graph.incidence_count());
+    colours_.resize(total);
+    for (std::size_t i = 0; i < total; ++i) {
+      const auto particles = graph.particles_of(original_[i]);
+      particles_.insert(particles_.end(), particles.begin(), particles.end());
+      offsets_.push_back(static_cast<std::uint32_t>(particles_.size()));
+      colours_[i] = colours[original_[i]];
+      masks_.take(particles, colours_[i]);
+      ++sizes_[colours_[i]];
+    }
+    // The owner table costs particles × colours entries: only when that is within a few
+    // times the graph itself (colourings with thousands of colours get direct moves only).
+    ejections_ = graph.particle_count() * count <= kOwnerEntriesPerIncidence * graph.incidence_count() + 1024;
+    if (ejections_) {
+      owner_.assign(graph.particle_count() * count, kNone);
+      for (std::size_t i = 0; i < total; ++i)
+        for (ParticleIndex p : particles_of(static_cast<ConstraintIndex>(i)))
+          owner_[std::size_t(p) * count_ + colours_[i]] = static_cast<ConstraintIndex>(i);
+    }
+    std::size_t widest = 1;
+    for (std::size_t i = 0; i < total; ++i) widest = std::max<std::size_t>(widest, offsets_[i + 1] - offsets_[i]);
+    ejected_.resize(widest);
+    destination_.resize(widest);
+    receivers_.resize(masks_.words());
+    all_colours_.assign(masks_.words(), 0);
+    for (std::size_t k = 0; k < count_; ++k) all_colours_[k / 64] |= std::uint64_t(1) << (k % 64);
+    // Good enough: largest − smallest within 0.5 % of the mean (and at least 1).
+    tolerance_ = std::max<std::size_t>(1, total / count_ / 200);
+    evaluations_left_ = kEvaluationsPerConstraint * total;
+  }
+
+  /// Sweeps colour by colour (as the schedule does), each colour's constraints by smallest
+  /// particle.
+  void run() {
+    std::vector<std::uint32_t> start(count_ + 1, 0);
+    for (Colour k : colours_) ++start[k + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<ConstraintIndex> order(colours_.size());
+    for (std::size_t i = 0; i < colours_.size(); ++i) order[start[colours_[i]]++] = static_cast<ConstraintIndex>(i);
+    sweep(order);
+  }
+
+  /// Writes the balanced colour of every constraint (input numbering).
+  void write(std::span<Colour> colours) const {
+    for (std::size_t i = 0; i < colours_.size(); ++i) colours[original_[i]] = colours_[i];
+  }
+
+ private:
+  std::span<const ParticleIndex> particles_of(ConstraintIndex i) const {
+    return {particles_.data() + offsets_[i], particles_.data() + offsets_[i + 1]};
+  }
+
+  void sweep(std::span<const ConstraintIndex> order) {
+    // Progress is checked per block of constraints as well as per sweep, so a pass with
+    // nothing to do (e.g. sizes forced at the lower bound) stops after a small part of a sweep.
+    const std::size_t block = std::max<std::size_t>(order.size() / kBlocksPerSweep, 4096);
+    refresh_extremes();
+    for (int sweep = 0; sweep < kMaximumSweeps && !balanced() && evaluations_left_ > 0; ++sweep) {
+      std::size_t moved = 0, moved_in_block = 0, visited = 0;
+      for (ConstraintIndex c : order) {
+        ++visited;
+        if (visited % 1024 == 0) {
+          refresh_extremes();
+          if (balanced()) return;
         }
+        if (visited % block == 0) {
+          if (moved_in_block * kBlockStallFraction < block) return;
+          moved_in_block = 0;
+        }
+        const bool moved_c = try_direct_move(c) || try_ejection(c);
+        moved += moved_c;
+        moved_in_block += moved_c;
       }
+      refresh_extremes();
+      // A sweep that moved almost nothing is the sign of a local optimum, often a forced one
+      // (at the lower bound colour sizes are fixed by the mesh): stop rather than sweep again.
+      if (moved * kStallFraction < order.size()) return;
     }
-    return true;
-  };
-  // Whether c has exactly one neighbour coloured b (charged to the work budget).
-  auto single_neighbour_in = [&](ConstraintIndex c, Colour b) {
-    ConstraintIndex found = kNone;
-    for (ParticleIndex p : graph.particles_of(c)) {
-      const auto around = graph.constraints_of(p);
-      if (around.size() > work_left) return false;
-      work_left -= around.size();
-      for (ConstraintIndex n : around) {
-        if (n == c || colours[n] != b) continue;
-        if (found != kNone && found != n) return false;
-        found = n;
-      }
-    }
-    return found != kNone;
-  };
+  }
 
-  const std::span<const ConstraintIndex> schedule_order = colouring.constraints_by_colour();
-  const std::size_t below = colours.size() / count;  // floor(mean)
-  // The smallest colour free at all `particles`, other than the two excluded (count if none).
-  auto smallest_free = [&](std::span<const ParticleIndex> particles, Colour excluded0, Colour excluded1) {
-    Colour best = static_cast<Colour>(count);
-    for (std::size_t w = 0; w < masks.words(); ++w) {
-      for (std::uint64_t free = ~masks.taken_word(particles, w); free != 0; free &= free - 1) {
+  void refresh_extremes() {
+    const auto [lo, hi] = std::minmax_element(sizes_.begin(), sizes_.end());
+    smallest_ = *lo;
+    largest_ = *hi;
+  }
+  bool balanced() const { return largest_ - smallest_ <= tolerance_; }
+
+  /// Lower bound of the change of Σ size² when a constraint leaves a colour of size_a for one
+  /// of size_b, ejecting `ejected` constraints from it to colours no smaller than the smallest.
+  std::int64_t best_case_change(std::size_t size_a, std::size_t size_b, std::int64_t ejected) const {
+    const std::int64_t a = std::int64_t(size_a), b = std::int64_t(size_b), low = std::int64_t(smallest_);
+    return (1 - 2 * a) + (1 - ejected) * (2 * b + 1 - ejected) + ejected * (2 * low + 1);
+  }
+
+  /// The smallest colour (sizes with the pending changes) among `allowed` free at all
+  /// `particles`, other than `excluded`; count_ if none.
+  Colour smallest_free(std::span<const ParticleIndex> particles, Colour excluded,
+                       std::span<const std::uint64_t> allowed) const {
+    Colour best = static_cast<Colour>(count_);
+    std::int64_t best_size = 0;
+    for (std::size_t w = 0; w < masks_.words(); ++w) {
+      std::uint64_t free = allowed[w] & ~masks_.taken_word(particles, w);
+      if (excluded / 64 == w) free &= ~(std::uint64_t(1) << (excluded % 64));
+      for (; free != 0; free &= free - 1) {
         const Colour k = static_cast<Colour>(w * 64 + std::countr_zero(free));
-        if (k >= count) break;
-        if (k == excluded0 || k == excluded1) continue;
-        if (best == count || sizes[k] < sizes[best]) best = k;
+        const std::int64_t size = changes_.size(k);
+        if (best == count_ || size < best_size) {
+          best = k;
+          best_size = size;
+        }
       }
     }
     return best;
-  };
-  constexpr ConstraintIndex kSeveral = kNone - 1;
-  std::vector<ConstraintIndex> blockers;
-  std::vector<Colour> receivers;
-  auto choose_receivers = [&] {
-    receivers.clear();
-    for (Colour k = 0; k < count; ++k)
-      if (sizes[k] < below) receivers.push_back(k);
-    std::stable_sort(receivers.begin(), receivers.end(),
-                     [&](Colour x, Colour y) { return sizes[x] < sizes[y]; });
-    if (receivers.size() > kReceivers) receivers.resize(kReceivers);
-  };
-  // Cheap single moves first, until none is left; then Kempe exchanges into the smallest
-  // colours, and single moves again after each exchange pass.
-  for (int kempe_passes = 0; kempe_passes <= kMaximumKempePasses; ++kempe_passes) {
-    // Sweeps of direct moves to a fixed point; then sweeps that also try ejections, while the
-    // work budget lasts.
-    for (bool ejections = false;; ejections = true) {
-      bool moved_any = false;
-      for (bool moved = true; moved && sweeps < kMaximumSweeps; ++sweeps) {
-        moved = false;
-        for (ConstraintIndex c : schedule_order) {
-          const Colour a = colours[c];
-          if (sizes[a] <= target) continue;
-          const auto particles = graph.particles_of(c);
-          // Into the smallest colour free for c, when that narrows the gap between the two:
-          // each move lowers the sum of squared sizes, and the sweeps are capped in number
-          // (kMaximumSweeps over the whole pass), since near-equal colours can trade single
-          // constraints for many sweeps while gaining little.
-          const Colour best = smallest_free(particles, a, a);
-          if (best < count && sizes[best] + 1 < sizes[a]) {
-            move(graph, masks, colours, c, best);
-            --sizes[a];
-            ++sizes[best];
-            moved = true;
-            continue;
-          }
-          if (!ejections || work_left == 0) continue;
-          // Ejection: c takes colour b from its single blocker n there, and n moves to a
-          // small colour d free for it; sizes: a − 1, d + 1, b unchanged.
-          blockers.assign(count, kNone);
-          for (ParticleIndex p : particles) {
-            const auto around = graph.constraints_of(p);
-            work_left -= std::min(work_left, around.size());
-            for (ConstraintIndex n : around) {
-              if (n == c) continue;
-              ConstraintIndex& blocker = blockers[colours[n]];
-              blocker = (blocker == kNone || blocker == n) ? n : kSeveral;
-            }
-          }
-          for (Colour b = 0; b < count; ++b) {
-            const ConstraintIndex n = blockers[b];
-            if (b == a || n == kNone || n == kSeveral) continue;
-            const Colour d = smallest_free(graph.particles_of(n), a, b);
-            if (d >= count || sizes[d] + 1 >= sizes[a]) continue;
-            move(graph, masks, colours, n, d);
-            move(graph, masks, colours, c, b);
-            --sizes[a];
-            ++sizes[d];
-            moved = true;
-            break;
-          }
+  }
+  /// Sets receivers_ to the colours of at most `largest` constraints.
+  void choose_receivers(std::size_t largest) {
+    std::fill(receivers_.begin(), receivers_.end(), 0);
+    for (std::size_t k = 0; k < count_; ++k)
+      if (sizes_[k] <= largest) receivers_[k / 64] |= std::uint64_t(1) << (k % 64);
+  }
+
+  void leave(ConstraintIndex c) {
+    const auto particles = particles_of(c);
+    masks_.release(particles, colours_[c]);
+    if (ejections_)
+      for (ParticleIndex p : particles) owner_[std::size_t(p) * count_ + colours_[c]] = kNone;
+    --sizes_[colours_[c]];
+  }
+  void enter(ConstraintIndex c, Colour k) {
+    const auto particles = particles_of(c);
+    masks_.take(particles, k);
+    if (ejections_)
+      for (ParticleIndex p : particles) owner_[std::size_t(p) * count_ + k] = c;
+    colours_[c] = k;
+    ++sizes_[k];
+  }
+
+  /// c alone into the smallest colour free for it, when that narrows the gap.
+  bool try_direct_move(ConstraintIndex c) {
+    const Colour a = colours_[c];
+    if (sizes_[a] <= smallest_ + 1) return false;
+    changes_.clear();
+    const Colour to = smallest_free(particles_of(c), a, all_colours_);
+    if (to >= count_ || sizes_[to] + 1 >= sizes_[a]) return false;
+    leave(c);
+    enter(c, to);
+    return true;
+  }
+
+  /// c into a colour b, its neighbours coloured b (one per shared particle at most) each
+  /// into the smallest colour then free for it; the first b that lowers Σ size² is taken.
+  bool try_ejection(ConstraintIndex c) {
+    const Colour a = colours_[c];
+    const auto particles = particles_of(c);
+    const std::int64_t arity = std::int64_t(particles.size());
+    // Nothing can pay off unless c's colour is above the smallest (single ejections) or c can
+    // eject several constraints from a large colour.
+    if (best_case_change(sizes_[a], largest_, 1) >= 0 && best_case_change(sizes_[a], largest_, arity) >= 0)
+      return false;
+    if (!ejections_ || evaluations_left_ == 0) return false;
+    // Ejected constraints only go to colours at least 2 below the larger of a and b (so
+    // receivers_ is chosen once for the largest b, and checked per b).
+    choose_receivers(std::max(sizes_[a], largest_) - 2);
+    masks_.release(particles, a);  // c's own colour, as if c had left it
+    bool moved = false;
+    std::size_t evaluations = 0;
+    for (std::size_t w = 0; w < masks_.words() && !moved && evaluations < kEvaluationsPerTry; ++w) {
+      for (std::uint64_t blocked = masks_.taken_word(particles, w); blocked != 0 && !moved;
+           blocked &= blocked - 1) {
+        const Colour b = static_cast<Colour>(w * 64 + std::countr_zero(blocked));
+        if (b >= count_) break;
+        if (best_case_change(sizes_[a], sizes_[b], arity) >= 0 &&
+            best_case_change(sizes_[a], sizes_[b], 1) >= 0)
+          continue;
+        std::size_t ejected = 0;
+        for (ParticleIndex p : particles) {
+          const ConstraintIndex e = owner_[std::size_t(p) * count_ + b];
+          if (e != kNone && std::find(ejected_.begin(), ejected_.begin() + ejected, e) == ejected_.begin() + ejected)
+            ejected_[ejected++] = e;
         }
-        moved_any = moved_any || moved;
-      }
-      if (ejections || work_left == 0) break;
-    }
-    if (kempe_passes == kMaximumKempePasses || work_left == 0) break;
-    choose_receivers();
-    if (receivers.empty()) break;
-    bool exchanged = false;
-    for (ConstraintIndex c : schedule_order) {
-      if (work_left == 0) break;
-      const Colour a = colours[c];
-      if (sizes[a] <= target) continue;
-      // Swapping a and b along c's chain moves (#a − #b) constraints from a to b.
-      for (Colour b : receivers) {
-        if (sizes[b] >= below || b == a) continue;
-        if (!single_neighbour_in(c, b)) continue;
-        if (!kempe_chain(c, a, b)) continue;
-        std::size_t in_a = 0;
-        for (ConstraintIndex x : chain) in_a += colours[x] == a;
-        const std::size_t in_b = chain.size() - in_a;
-        if (in_a <= in_b || sizes[b] + (in_a - in_b) >= sizes[a]) continue;
-        for (ConstraintIndex x : chain) masks.release(graph.particles_of(x), colours[x]);
-        for (ConstraintIndex x : chain) {
-          colours[x] = colours[x] == a ? b : a;
-          masks.take(graph.particles_of(x), colours[x]);
+        if (best_case_change(sizes_[a], sizes_[b], std::int64_t(ejected)) >= 0) continue;
+        ++evaluations;
+        changes_.clear();
+        changes_.add(a, -1);
+        changes_.add(b, 1 - std::int64_t(ejected));
+        bool placed = true;
+        for (std::size_t i = 0; i < ejected && placed; ++i) {
+          destination_[i] = smallest_free(particles_of(ejected_[i]), b, receivers_);
+          placed = destination_[i] < count_;
+          if (placed) changes_.add(destination_[i], 1);
         }
-        sizes[a] -= in_a - in_b;
-        sizes[b] += in_a - in_b;
-        exchanged = true;
-        choose_receivers();
-        break;
+        if (!placed || changes_.square_sum_change() >= 0) continue;
+        masks_.take(particles, a);
+        leave(c);
+        for (std::size_t i = 0; i < ejected; ++i) leave(ejected_[i]);
+        enter(c, b);
+        for (std::size_t i = 0; i < ejected; ++i) enter(ejected_[i], destination_[i]);
+        moved = true;
       }
-      if (receivers.empty()) break;
     }
-    if (!exchanged) break;
+    if (!moved) masks_.take(particles, a);
+    evaluations_left_ -= std::min(evaluations_left_, std::max<std::size_t>(evaluations, 1));
+    return moved;
+  }
+
+  std::size_t count_;
+  std::vector<ConstraintIndex> original_;  // input id of each constraint of the private copy
+  std::vector<std::uint32_t> offsets_;
+  std::vector<ParticleIndex> particles_;
+  std::vector<Colour> colours_;
+  ParticleColourMasks masks_;
+  std::vector<std::size_t> sizes_;
+  std::vector<ConstraintIndex> owner_;  // owner_[p * count_ + k]: the constraint coloured k at p
+  SizeChanges changes_;
+  std::vector<ConstraintIndex> ejected_;
+  std::vector<Colour> destination_;
+  std::vector<std::uint64_t> receivers_;  // colours small enough to receive, one bit each
+  std::vector<std::uint64_t> all_colours_;
+  std::size_t tolerance_ = 1;
+  std::size_t evaluations_left_ = 0;
+  bool ejections_ = false;
+  std::size_t smallest_ = 0, largest_ = 0;
+};
+
+}  // namespace
+
+Colouring balance_colours(const ConstraintGraph& graph, const Colouring& colouring) {
+  const std::size_t count = colouring.colour_count();
+  std::vector<Colour> colours(colouring.colours().begin(), colouring.colours().end());
+  if (count >= 2) {
+    ColourBalancer balancer(graph, colours, count);
+    balancer.run();
+    balancer.write(colours);
   }
   return rebuild(graph, colouring, std::move(colours));
 }

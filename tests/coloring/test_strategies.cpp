@@ -65,6 +65,9 @@ TEST_P(EveryStrategy, PostPassesKeepColouringsValidAndNeverAddColours) {
     EXPECT_LE(reduced.colour_count(), plain.colour_count());
     EXPECT_EQ(balanced.colour_count(), reduced.colour_count());
     EXPECT_EQ(reduced.renumbers_particles(), plain.renumbers_particles());
+    const Colouring balanced_plain = balance_colours(mesh.graph, plain);
+    EXPECT_TRUE(validate(mesh.graph, balanced_plain).valid) << validate(mesh.graph, balanced_plain).problem;
+    EXPECT_EQ(balanced_plain.colour_count(), plain.colour_count());
   }
 }
 
@@ -169,6 +172,13 @@ TEST(GreedyStrategy, IsExactlyFirstFitInInputOrderAlsoPast64Colours) {
   graphs.push_back(ConstraintGraph(star_masses, star_groups));
   graphs.push_back(test::cloth_graph(30, 20, true));
   graphs.push_back(test::tet_bar_graph(3, 4, 5));
+  // The same star after one unrelated edge: the hand-over happens at an odd constraint.
+  std::vector<ParticleIndex> shifted_star = {101, 102};
+  shifted_star.insert(shifted_star.end(), star.begin(), star.end());
+  const std::vector<Real> shifted_masses(103, Real(1));
+  const std::vector<ConstraintGroup> shifted_groups = {ConstraintGroup::fixed_arity("star", 2, shifted_star)};
+  graphs.push_back(ConstraintGraph(shifted_masses, shifted_groups));
+  for (const test::TestMesh& mesh : meshes()) graphs.push_back(mesh.graph);
   for (const ConstraintGraph& graph : graphs) {
     const Colouring greedy = registry().get("greedy").colour(graph, {});
     const auto expected = reference_first_fit(graph);
@@ -302,6 +312,74 @@ TEST(Balance, EvensOutColourSizesWithoutAddingColours) {
   EXPECT_GT(before.size_ratio, 2.0);
   EXPECT_LT(after.size_ratio, before.size_ratio);
   EXPECT_LE(after.size_ratio, 1.1) << format_statistics(after);
+}
+
+std::size_t squared_size_sum(const Colouring& colouring) {
+  std::size_t sum = 0;
+  for (Colour k = 0; k < colouring.colour_count(); ++k) sum += colouring.colour_size(k) * colouring.colour_size(k);
+  return sum;
+}
+
+TEST(Balance, ReachesTenPercentNearTheLowerBound) {
+  // The stencil colouring of a tet bar is close to the lower bound with colours of pure
+  // tetrahedra (covering nearly every particle) and of pure edges: no constraint can move on
+  // its own, only by ejecting the constraints that block it (direct moves and short Kempe
+  // chains stopped at 1.5 here).
+  const ConstraintGraph graph = test::tet_bar_graph(30, 12, 12);
+  const Colouring stencil = registry().get("stencil").colour(graph, {});
+  const ColouringStatistics before = compute_statistics(graph, stencil);
+  ASSERT_LE(before.colours, graph.colour_lower_bound() + 3);
+  const Colouring balanced = balance_colours(graph, stencil);
+  const ColouringStatistics after = compute_statistics(graph, balanced);
+  ASSERT_TRUE(after.valid) << after.problem;
+  EXPECT_EQ(after.colours, before.colours);
+  EXPECT_LE(after.size_ratio, 1.1) << format_statistics(after);
+  EXPECT_LT(squared_size_sum(balanced), squared_size_sum(stencil));
+}
+
+TEST(Balance, KeepsForcedSizesAtTheLowerBound) {
+  // Distance + bending on the uniform cloth at its lower bound (18): each colour is an exact
+  // cover of the interior particles, so edge colours hold twice as many constraints as
+  // bending colours and only a few constraints at the border can move. The pass must stay
+  // valid, keep the count and stop (it does, early, once a block of a sweep moves nothing).
+  const ConstraintGraph graph = test::cloth_graph(40, 40, true);
+  const Colouring stencil = registry().get("stencil").colour(graph, {});
+  ASSERT_EQ(stencil.colour_count(), graph.colour_lower_bound());
+  const Colouring balanced = balance_colours(graph, stencil);
+  EXPECT_TRUE(validate(graph, balanced).valid);
+  EXPECT_EQ(balanced.colour_count(), stencil.colour_count());
+  EXPECT_LE(squared_size_sum(balanced), squared_size_sum(stencil));
+}
+
+TEST(Balance, IsDeterministicAndKeepsScheduleOrder) {
+  const ConstraintGraph graph = test::tet_bar_graph(12, 5, 5);
+  const Colouring greedy = registry().get("greedy").colour(graph, {});
+  const Colouring first = balance_colours(graph, greedy);
+  const Colouring second = balance_colours(graph, greedy);
+  EXPECT_TRUE(std::equal(first.colours().begin(), first.colours().end(), second.colours().begin()));
+  // Within each colour, constraints keep the relative order they had in the input schedule.
+  std::vector<std::size_t> position(graph.constraint_count());
+  for (std::size_t i = 0; i < greedy.constraints_by_colour().size(); ++i)
+    position[greedy.constraints_by_colour()[i]] = i;
+  for (Colour k = 0; k < first.colour_count(); ++k) {
+    const auto members = first.constraints_of(k);
+    for (std::size_t i = 1; i < members.size(); ++i)
+      EXPECT_LT(position[members[i - 1]], position[members[i]]);
+  }
+}
+
+TEST(Balance, HandlesManyColoursWithDirectMovesOnly) {
+  // 400 independent constraints in 151 colours, one holding 250: too many colours for the
+  // particle × colour table, so only direct moves run, which suffice here.
+  const ConstraintGraph graph = test::isolated_graph(400);
+  std::vector<Colour> colours(graph.constraint_count());
+  for (std::size_t c = 0; c < colours.size(); ++c) colours[c] = static_cast<Colour>(std::min<std::size_t>(c, 150));
+  const Colouring skewed = Colouring::from_colours(colours);
+  const Colouring balanced = balance_colours(graph, skewed);
+  const ColouringStatistics after = compute_statistics(graph, balanced);
+  EXPECT_TRUE(after.valid) << after.problem;
+  EXPECT_EQ(after.colours, skewed.colour_count());
+  EXPECT_LE(after.largest, after.smallest + 1);
 }
 
 TEST(Reduce, RemovesColoursAndNeverAddsAny) {

@@ -48,7 +48,7 @@ class Cli : public ::testing::Test {
   void TearDown() override { fs::remove_all(folder_); }
 
   Outcome run(const std::vector<std::string>& arguments) const {
-    std::string command = quote(TESSERA_TOOL);
+    std::string command = "cd " + quote(folder_.string()) + " && " + quote(TESSERA_TOOL);
     // Appended piece by piece: g++ 12 warns (-Wrestrict, a false positive) on " " + string.
     for (const std::string& argument : arguments) command.append(" ").append(quote(argument));
     const fs::path out = folder_ / "stdout.txt", err = folder_ / "stderr.txt";
@@ -253,80 +253,67 @@ TEST_F(Cli, ColorComparesEveryStrategyTheSameForAnyThreadCount) {
     EXPECT_NE(table.out.find(name), std::string::npos) << name;
 }
 
+// Each bad input with the exact line it prints (docs/errors.md lists the same table). The
+// tool runs in the test's folder, so the files are named as a user in that folder would.
 TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
-  const fs::path truncated = write("truncated.msh", slurp(kData / "cube_v41.msh").substr(0, 300));
-  const fs::path binary = write("binary.obj", std::string("v 0 0 0\n\x01\x02\xff\xfe\0\0f 1 2 3\n", 20));
-  const fs::path wrong_magic = write("magic.msh", "$MeshFormat\n9.9 0 8\n$EndMeshFormat\n");
-  const fs::path syntax = write("syntax.json", "{\"generator\": \"cloth\",,}");
-  const fs::path unknown_key = write("key.json", R"({"generator": "cloth", "gravityy": [0, 0, 0]})");
-  const fs::path bad_value = write("value.json", R"({"generator": "cloth", "iterations": 0})");
-  const fs::path empty = write("empty.obj", "# nothing\n");
-  const std::vector<std::vector<std::string>> cases = {
-      {},
-      {"bogus"},
-      {"run", "--unknown"},
-      {"run", "--frames", "abc"},
-      {"run", "--frames", "-1"},
-      {"run", "--substeps", "0"},
-      {"run", "--iterations", "0"},
-      {"run", "--threads", "0"},
-      {"run", "--dt", "0"},
-      {"run", "--dt", "-0.5"},
-      {"run", "--dt", "inf"},
-      {"run", "--damping", "-1"},
-      {"run", "--mode", "fast"},
-      {"run", "--strategy", "nope"},
-      {"run", "--pins", "left"},
-      {"run", "--bending", "floppy"},
-      {"run", "--shell-material", "silk"},
-      {"run", "--solid-material", "jelly"},
-      {"run", "cloth:1x5"},
-      {"run", "cloth:abc"},
-      {"run", "bar:0x1x1"},
-      {"run", "cloth:8", "extra"},
-      {"run", (folder_ / "missing.obj").string()},
-      {"run", (folder_ / "mesh.xyz").string()},
-      {"run", truncated.string()},
-      {"run", binary.string()},
-      {"run", wrong_magic.string()},
-      {"run", empty.string()},
-      {"run", syntax.string()},
-      {"run", unknown_key.string()},
-      {"run", bad_value.string()},
-      {"run", "cloth:8", "--obj"},
-      {"run", "cloth:8", "--out", (folder_ / "no" / "such" / "folder").string()},
-      {"run", "cloth:8", "--out", truncated.string()},
-      {"color", "--strategy", "nope"},
-      {"color", "--threads", "0"},
-      {"color", (folder_ / "missing.node").string()},
-      {"info", "--bogus"},
+  write("truncated.msh", slurp(kData / "cube_v41.msh").substr(0, 300));
+  write("binary.obj", std::string("v 0 0 0\n\x01\x02\xff\xfe\0\0f 1 2 3\n", 20));
+  write("magic.msh", "$MeshFormat\n9.9 0 8\n$EndMeshFormat\n");
+  write("syntax.json", "{\"generator\": \"cloth\",,}");
+  write("key.json", R"({"generator": "cloth", "gravityy": [0, 0, 0]})");
+  write("value.json", R"({"generator": "cloth", "iterations": 0})");
+  write("empty.obj", "# nothing\n");
+  const std::string strategies =
+      "(known: greedy, largest-first, smallest-last, dsatur, stencil, iterated-greedy, random, metis)";
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{}, "tessera: a subcommand is needed: run, color or info (see tessera --help)"},
+      {{"bogus"}, "tessera: unknown subcommand 'bogus' (known: run, color, info)"},
+      {{"run", "--unknown"}, "tessera run: The following argument was not expected: --unknown"},
+      {{"run", "--frames", "abc"}, "tessera run: --frames: must be an integer from 0 to 2147483648, not 'abc'"},
+      {{"run", "--frames", "-1"}, "tessera run: --frames: must be an integer from 0 to 2147483648, not '-1'"},
+      {{"run", "--substeps", "0"}, "tessera run: --substeps: must be an integer from 1 to 1048576, not '0'"},
+      {{"run", "--iterations", "0"}, "tessera run: --iterations: must be an integer from 1 to 1048576, not '0'"},
+      {{"run", "--threads", "0"}, "tessera run: --threads: must be an integer from 1 to 4096, not '0'"},
+      {{"run", "--dt", "0"}, "tessera run: --dt: must be a finite number of seconds above 0, not '0'"},
+      {{"run", "--dt", "-0.5"}, "tessera run: --dt: must be a finite number of seconds above 0, not '-0.5'"},
+      {{"run", "--dt", "inf"}, "tessera run: --dt: must be a finite number of seconds above 0, not 'inf'"},
+      {{"run", "--damping", "-1"}, "tessera run: --damping: must be a finite number of 1/seconds (0 or more), not '-1'"},
+      {{"run", "--mode", "fast"}, "tessera run: unknown solver mode 'fast' (known: gs, jacobi, hybrid, sequential)"},
+      {{"run", "--strategy", "nope"}, "tessera run: unknown colouring strategy 'nope' " + strategies},
+      {{"run", "--pins", "left"}, "tessera run: --pins: unknown pin rule 'left' (known: default, none, lowest-x, lowest-y, lowest-z, highest-x, highest-y, highest-z)"},
+      {{"run", "--bending", "floppy"}, "tessera run: --bending: unknown value 'floppy' (known: dihedral, isometric, none)"},
+      {{"run", "--shell-material", "silk"}, "tessera run: --shell-material: unknown value 'silk' (known: distance, strain_triangle, fem_triangle)"},
+      {{"run", "--solid-material", "jelly"}, "tessera run: --solid-material: unknown value 'jelly' (known: fem_tetra, strain_tetra, volume_and_distance)"},
+      {{"run", "cloth:1x5"}, "tessera run: scene 'cloth:1x5': a cloth needs at least 2 vertices per side"},
+      {{"run", "cloth:abc"}, "tessera run: scene 'cloth:abc': expected cloth:N or cloth:CxR with vertex counts, e.g. cloth:256x256"},
+      {{"run", "bar:0x1x1"}, "tessera run: scene 'bar:0x1x1': a bar needs at least 1 cell per side"},
+      {{"run", "cloth:8", "extra"}, "tessera run: The following argument was not expected: extra"},
+      {{"run", "missing.obj"}, "tessera run: missing.obj: cannot open: no such file"},
+      {{"run", "mesh.xyz"}, "tessera run: mesh.xyz: unsupported mesh file extension '.xyz' (expected .obj, .node, .ele, .face or .msh)"},
+      {{"run", "truncated.msh"}, "tessera run: truncated.msh:26: expected 4 coordinates (x y z and 1 parametric), found 3"},
+      {{"run", "binary.obj"}, "tessera run: binary.obj:2: unexpected control byte 0x01: this is not a text file"},
+      {{"run", "magic.msh"}, "tessera run: magic.msh:2: unsupported .msh version 9.9 (only 2.2 and 4.1 are read)"},
+      {{"run", "empty.obj"}, "tessera run: empty.obj:1: empty file (no statements, only blank lines or comments)"},
+      {{"run", "syntax.json"}, "tessera run: syntax.json: line 1, column 23: syntax error while parsing object key - unexpected ','; expected string literal"},
+      {{"run", "key.json"}, "tessera run: key.json: unknown key 'gravityy'"},
+      {{"run", "value.json"}, "tessera run: value.json: 'iterations' must be a positive integer up to 2^31, not 0"},
+      {{"run", "cloth:8", "--obj"}, "tessera run: --obj needs --out DIR"},
+      {{"run", "cloth:8", "--out", "no/such/folder"}, "tessera run: --out: cannot create folder no/such/folder: No such file or directory"},
+      {{"run", "cloth:8", "--out", "truncated.msh"}, "tessera run: --out: truncated.msh exists and is not a folder"},
+      {{"color", "--strategy", "nope"}, "tessera color: unknown colouring strategy 'nope' " + strategies},
+      {{"color", "--threads", "0"}, "tessera color: --threads: must be an integer from 1 to 4096, not '0'"},
+      {{"color", "missing.node"}, "tessera color: missing.node: cannot open: no such file"},
+      {{"info", "--bogus"}, "tessera info: The following argument was not expected: --bogus"},
   };
-  for (const auto& arguments : cases) {
+  for (const auto& [arguments, message] : cases) {
     std::string shown;
     for (const auto& argument : arguments) shown += " " + argument;
     const Outcome outcome = run(arguments);
-    EXPECT_EQ(outcome.exit_code, 2) << shown << "\n" << outcome.err;
+    EXPECT_EQ(outcome.exit_code, 2) << shown;
     EXPECT_EQ(outcome.out, "") << shown;
-    ASSERT_FALSE(outcome.err.empty()) << shown;
-    EXPECT_EQ(std::count(outcome.err.begin(), outcome.err.end(), '\n'), 1) << shown << "\n" << outcome.err;
-    EXPECT_EQ(outcome.err.rfind("tessera", 0), 0u) << shown << "\n" << outcome.err;
+    EXPECT_EQ(outcome.err, message + "\n") << shown;
   }
   EXPECT_FALSE(fs::exists(folder_ / "no"));
-}
-
-TEST_F(Cli, ErrorMessagesSayWhatIsWrong) {
-  EXPECT_EQ(run({"run", "--mode", "fast"}).err,
-            "tessera run: unknown solver mode 'fast' (known: gs, jacobi, hybrid, sequential)\n");
-  EXPECT_EQ(run({"run", "--threads", "0"}).err,
-            "tessera run: --threads: must be an integer from 1 to 4096, not '0'\n");
-  EXPECT_EQ(run({"run", "--dt", "0"}).err,
-            "tessera run: --dt: must be a finite number of seconds above 0, not '0'\n");
-  EXPECT_EQ(run({"bogus"}).err, "tessera: unknown subcommand 'bogus' (known: run, color, info)\n");
-  EXPECT_EQ(run({"run", "cloth:1x5"}).err,
-            "tessera run: scene 'cloth:1x5': a cloth needs at least 2 vertices per side\n");
-  const fs::path key = write("key.json", R"({"generator": "cloth", "gravityy": [0, 0, 0]})");
-  EXPECT_EQ(run({"run", key.string()}).err,
-            "tessera run: " + key.string() + ": unknown key 'gravityy'\n");
 }
 
 }  // namespace

@@ -129,8 +129,11 @@ TEST(Numerics, ExtremeComplianceStaysFinite) {
       // Rigid: the edges keep their length; no resistance: the free corner falls freely.
       const auto x = solver.positions();
       const Real fallen = model.particles.position(0).y() - x[0].y();
-      if (compliance == Real(1e12)) EXPECT_NEAR(fallen, Real(0.5 * 9.81), Real(0.1));
-      else EXPECT_LT(fallen, Real(1.1));
+      if (compliance == Real(1e12)) {
+        EXPECT_NEAR(fallen, Real(0.5 * 9.81), Real(0.1));
+      } else {
+        EXPECT_LT(fallen, Real(1.1));
+      }
     }
   }
 }
@@ -161,7 +164,9 @@ TEST(Numerics, ExtremeStiffnessAndYoungsModulusStayFinite) {
       settings.semantics = ConstraintSemantics::stiffness;
       Solver solver = make_solver(model, settings);
       const int failures = step_checked(solver, 60);
-      if (stiffness <= 1) EXPECT_EQ(failures, 0);
+      if (stiffness <= 1) {
+        EXPECT_EQ(failures, 0);
+      }
     }
   }
 }

@@ -82,7 +82,7 @@ void soak(const Model& model, SolverMode mode) {
   }
   EXPECT_EQ(solver.statistics().steps, steps);
   const long growth = resident_bytes() - rss_after_warm_up;
-  RecordProperty("rss_growth_bytes", std::to_string(growth));
+  testing::Test::RecordProperty("rss_growth_bytes", std::to_string(growth));
 #ifndef TESSERA_SOAK_UNDER_ASAN
   EXPECT_LE(growth, kRssSlack) << "resident memory grew by " << growth << " bytes after warm-up";
 #endif
@@ -97,7 +97,9 @@ TEST_P(Soak, BarStaysFiniteWithFlatMemory) { soak(test::tet_bar_model(2, 2, 4), 
 INSTANTIATE_TEST_SUITE_P(EveryMode, Soak,
                          testing::Values(SolverMode::gs, SolverMode::jacobi, SolverMode::hybrid,
                                          SolverMode::sequential),
-                         [](const auto& info) { return std::string(solver_mode_name(info.param)); });
+                         [](const testing::TestParamInfo<SolverMode>& mode) {
+                           return std::string(solver_mode_name(mode.param));
+                         });
 
 }  // namespace
 }  // namespace tessera

@@ -335,10 +335,15 @@ TEST(ErrorCatalogue, UnreadableFiles) {
 TEST(ErrorCatalogue, TruncatedFiles) {
   const std::string msh = read_text(kDataDir / "cube_v41.msh");
   std::istringstream cut_msh(msh.substr(0, msh.find("$EndElements")));
-  EXPECT_EQ(invalid_input([&] { io::read_gmsh(cut_msh, "cut.msh"); }), "?");
+  EXPECT_EQ(invalid_input([&] { io::read_gmsh(cut_msh, "cut.msh"); }),
+            "cut.msh:74: truncated: the file ends before $EndElements");
+  // The comment lines, the header and 3 of its 12 points.
   const std::string node = read_text(kDataDir / "cube.node");
-  std::istringstream cut_node(node.substr(0, node.size() / 2)), ele(read_text(kDataDir / "cube.ele"));
-  EXPECT_EQ(invalid_input([&] { io::read_tetgen(cut_node, ele, "cut.node", "cube.ele"); }), "?");
+  std::size_t end = 0;
+  for (int line = 0; line < 6; ++line) end = node.find('\n', end) + 1;
+  std::istringstream cut_node(node.substr(0, end)), ele(read_text(kDataDir / "cube.ele"));
+  EXPECT_EQ(invalid_input([&] { io::read_tetgen(cut_node, ele, "cut.node", "cube.ele"); }),
+            "cut.node:7: truncated: the file ends after 3 of the 12 points its header declares");
 }
 
 TEST(ErrorCatalogue, WrongMagic) {
@@ -352,7 +357,7 @@ TEST(ErrorCatalogue, WrongMagic) {
   // A .node file that is an OBJ.
   std::istringstream obj_as_node("v 0 0 0\n"), ele("1 4 0\n1 1 2 3 4\n");
   EXPECT_EQ(invalid_input([&] { io::read_tetgen(obj_as_node, ele, "cube.node", "cube.ele"); }),
-            "?");
+            "cube.node:1: point count 'v' is not an integer");
 }
 
 }  // namespace

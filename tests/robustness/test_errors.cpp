@@ -343,7 +343,7 @@ TEST(ErrorCatalogue, TruncatedFiles) {
   for (int line = 0; line < 6; ++line) end = node.find('\n', end) + 1;
   std::istringstream cut_node(node.substr(0, end)), ele(read_text(kDataDir / "cube.ele"));
   EXPECT_EQ(invalid_input([&] { io::read_tetgen(cut_node, ele, "cut.node", "cube.ele"); }),
-            "cut.node:7: truncated: the file ends after 3 of the 12 points its header declares");
+            "cut.node:6: truncated: the file ends after 3 of the 12 points its header declares");
 }
 
 TEST(ErrorCatalogue, WrongMagic) {

@@ -66,7 +66,9 @@ std::size_t first_fit_in_id_order(const ConstraintGraph& graph, ParticleColourMa
     const ParticleIndex* particles = graph.constraint_particles().data();
     for (; c < count; ++c) {
       const std::uint32_t begin = offsets[c], end = offsets[c + 1];
-      if (c + kPrefetchDistance < count)
+      // Constraints without a movable particle have no entries: the offset ahead may be the
+      // end of the particle array (which is empty, its data() null, when none has any).
+      if (c + kPrefetchDistance < count && offsets[c + kPrefetchDistance] < offsets[count])
         __builtin_prefetch(&bits[particles[offsets[c + kPrefetchDistance]]]);
       std::uint64_t taken = 0;
       for (std::uint32_t j = begin; j < end; ++j) taken |= bits[particles[j]];

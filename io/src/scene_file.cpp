@@ -25,6 +25,23 @@ using Json = nlohmann::json;
 
 constexpr std::string_view kAxes = "xyz";
 
+/// True when `number` is finite and converts to a finite Real (converting a double beyond the
+/// range of float is undefined behaviour, so this is checked before any cast).
+bool fits_real(double number) {
+  return std::isfinite(number) && std::abs(number) <= double(std::numeric_limits<Real>::max());
+}
+
+/// The product of `counts`, or 0 when it exceeds `limit` (checked before each multiplication,
+/// so nothing wraps).
+std::size_t product_up_to(std::initializer_list<std::size_t> counts, std::size_t limit) {
+  std::size_t product = 1;
+  for (const std::size_t count : counts) {
+    if (count != 0 && product > limit / count) return 0;
+    product *= count;
+  }
+  return product;
+}
+
 /// Parses "AxBxC" (count parts) into positive integers; false on any other text.
 bool parse_sizes(std::string_view text, std::size_t* sizes, std::size_t count) {
   for (std::size_t i = 0; i < count; ++i) {
@@ -109,8 +126,7 @@ class ObjectReader {
     const double number = value->get<double>();
     const bool above = low_inclusive ? number >= low : number > low;
     const bool below = high_inclusive ? number <= high : number < high;
-    if (!std::isfinite(number) || !above || !below ||
-        !std::isfinite(static_cast<double>(static_cast<Real>(number))))
+    if (!fits_real(number) || !above || !below)
       fail(key_name(key) + " must be a number " + range() + ", not " + show(*value));
     out = static_cast<Real>(number);
   }
@@ -258,7 +274,7 @@ SceneDescription describe(const Json& json, const std::string& name,
   if (const Json* gravity = reader.find("gravity")) {
     if (!gravity->is_array() || gravity->size() != 3 ||
         !std::all_of(gravity->begin(), gravity->end(), [](const Json& g) {
-          return g.is_number() && std::isfinite(g.get<double>());
+          return g.is_number() && fits_real(g.get<double>());
         }))
       reader.fail("'gravity' must be an array of 3 finite numbers, not " + ObjectReader::show(*gravity));
     for (Eigen::Index k = 0; k < 3; ++k)
@@ -330,7 +346,8 @@ SceneDescription parse_scene_spec(std::string_view spec) {
         return fail("expected cloth:N or cloth:CxR with vertex counts, e.g. cloth:256x256");
       }
       if (both[0] < 2 || both[1] < 2) return fail("a cloth needs at least 2 vertices per side");
-      if (both[0] * both[1] > std::size_t(1) << 31) return fail("more than 2^31 vertices");
+      if (product_up_to({both[0], both[1]}, std::size_t(1) << 31) == 0)
+        return fail("more than 2^31 vertices");
       description.cloth_columns = both[0];
       description.cloth_rows = both[1];
     }
@@ -343,7 +360,7 @@ SceneDescription parse_scene_spec(std::string_view spec) {
       if (!parse_sizes(spec.substr(4), cells, 3))
         return fail("expected bar:XxYxZ with cell counts, e.g. bar:10x10x80");
       if (cells[0] < 1 || cells[1] < 1 || cells[2] < 1) return fail("a bar needs at least 1 cell per side");
-      if ((cells[0] + 1) * (cells[1] + 1) * (cells[2] + 1) > std::size_t(1) << 31)
+      if (product_up_to({cells[0] + 1, cells[1] + 1, cells[2] + 1}, std::size_t(1) << 31) == 0)
         return fail("more than 2^31 vertices");
       description.bar_cells = {cells[0], cells[1], cells[2]};
     }
@@ -373,8 +390,9 @@ SceneDescription parse_scene_json(std::istream& in, const std::string& name,
   Json json;
   try {
     json = Json::parse(in, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
-  } catch (const Json::parse_error& error) {
-    // "[json.exception.parse_error.101] parse error at line 3, column 14: syntax error ..."
+  } catch (const Json::exception& error) {
+    // "[json.exception.parse_error.101] parse error at line 3, column 14: syntax error ...",
+    // "[json.exception.out_of_range.406] number overflow parsing '1e400'"
     std::string message = error.what();
     const std::size_t at = message.find(" at line ");
     if (at != std::string::npos) {
@@ -385,7 +403,11 @@ SceneDescription parse_scene_json(std::istream& in, const std::string& name,
     std::replace(message.begin(), message.end(), '\n', ' ');
     throw InvalidInput(name + ": " + message);
   }
-  return describe(json, name, base);
+  try {
+    return describe(json, name, base);
+  } catch (const Json::exception& error) {  // every value's type is checked first: a safety net
+    throw InvalidInput(name + ": " + error.what());
+  }
 }
 
 std::vector<VertexIndex> boundary_triangles(std::span<const VertexIndex> tetrahedra) {

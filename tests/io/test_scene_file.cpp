@@ -59,6 +59,8 @@ TEST(SceneSpec, BadSizesNameTheSpec) {
   EXPECT_EQ(spec_error("bar:2x2"),
             "scene 'bar:2x2': expected bar:XxYxZ with cell counts, e.g. bar:10x10x80");
   EXPECT_EQ(spec_error("cloth:100000x100000"), "scene 'cloth:100000x100000': more than 2^31 vertices");
+  EXPECT_EQ(spec_error("bar:999999999x999999999x999999999"),
+            "scene 'bar:999999999x999999999x999999999': more than 2^31 vertices");
   EXPECT_EQ(spec_error(""), "scene '': empty");
   EXPECT_EQ(spec_error("missing.json"), "missing.json: cannot open the scene file");
 }
@@ -126,6 +128,12 @@ TEST(SceneFile, ErrorsNameTheKeyOrTheLine) {
             "scene.json: 'shell.poisson_ratio' must be a number in [0, 0.5), not 0.5");
   EXPECT_EQ(json_error(R"({"generator": "cloth", "shell": {"bending": "soft"}})"),
             "scene.json: 'shell.bending' must be one of dihedral, isometric, none, not \"soft\"");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "gravity": [0, 1e400, 0]})"),
+            "scene.json: number overflow parsing '1e400'");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "time_step": 1e200})"),
+            sizeof(Real) == sizeof(float)
+                ? "scene.json: 'time_step' must be a number in (0, inf), not 1e+200"
+                : "no error");
   EXPECT_EQ(json_error(R"({"generator": "cloth", "gravity": [0, 1]})"),
             "scene.json: 'gravity' must be an array of 3 finite numbers, not [0,1]");
   EXPECT_EQ(json_error(R"({"generator": "cloth", "pins": [1, -1]})"),

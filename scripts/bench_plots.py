@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plots and summary.md of a Tessera throughput report (called by scripts/bench).
 
-    bench_plots.py RESULTS_DIR [--dpi N]
+    bench_plots.py RESULTS_DIR [--out DIR] [--dpi N]
 
 Reads whatever of these RESULTS_DIR holds (Google Benchmark JSON unless said otherwise):
   bandwidth.json    bandwidth/triad/threads:<T>          (bench_bandwidth)
@@ -10,7 +10,7 @@ Reads whatever of these RESULTS_DIR holds (Google Benchmark JSON unless said oth
   scaling.json      solver_size/gs/<kind>:<size>/threads:<T>  (bench_solver)
   coloring.json     coloring/<strategy>/<mesh>           (bench_coloring)
   convergence.json  residual per iteration               (convergence_report, its own JSON)
-and writes into RESULTS_DIR one PNG per plot it has data for (kernels.png,
+and writes into RESULTS_DIR (or DIR) one PNG per plot it has data for (kernels.png,
 solver_scaling.png, size_scaling.png, coloring.png, convergence.png) and summary.md with the
 figures, including the fraction of the bandwidth ceiling the solver reaches.
 
@@ -266,21 +266,32 @@ def plot_size_scaling(rows, bandwidth, path, dpi):
             size, row = points[-1]
             if ceilings[-1]:
                 largest.append((kind_label(kind, size), threads, rates[-1], ceilings[-1]))
-        # bytes per projection does not depend on the thread count: one curve per kind
+        # What must move per projection (the model, the same for every thread count) against
+        # what the memory bus could move in the time one projection took: where the two
+        # meet, the sweep runs at the bandwidth ceiling.
         points = kinds[kind][max(kinds[kind])]
         ax_bytes.plot([row.get("particles", s) for s, row in points],
                       [row.get("bytes_per_projection", float("nan")) for _, row in points],
-                      marker="s", color="#555555")
+                      marker="s", color="#555555", label="must move (traffic model)")
+        for threads in sorted(kinds[kind]):
+            band = bandwidth_at(bandwidth, threads)
+            if not band:
+                continue
+            points = kinds[kind][threads]
+            ax_bytes.plot([row.get("particles", s) for s, row in points],
+                          [band / row["items_per_second"] for _, row in points], marker="o",
+                          linestyle=":", label=f"triad bandwidth ÷ measured rate, {threads} thread(s)")
+        ax_bytes.legend(fontsize=7)
         title = "cloth N×N (distance + dihedral)" if kind == "cloth" else "FEM tet bar n×n×4n"
         for ax in (ax_rate, ax_bytes, ax_fraction):
             ax.set_xscale("log")
             ax.set_xlabel("particles")
             ax.grid(alpha=0.3, which="both")
-        ax_rate.set_yscale("log")
+        ax_rate.set_ylim(bottom=0)
         ax_rate.set_ylabel("projections / s")
         ax_rate.set_title(f"{title}: throughput", fontsize=10)
         ax_rate.legend(fontsize=7)
-        ax_bytes.set_ylabel("bytes moved per projection (model)")
+        ax_bytes.set_ylabel("bytes per projection")
         ax_bytes.set_ylim(bottom=0)
         ax_bytes.set_title(f"{title}: bytes per projection", fontsize=10)
         ax_fraction.set_ylabel("% of bandwidth ceiling")
@@ -348,6 +359,9 @@ def plot_convergence(report, path, dpi):
     summary = []
     for index, scene in enumerate(names):
         entry = scenes[scene]
+        measure = entry.get("measure", "rms")
+        measure_label = ("rms residual of all constraints" if measure == "rms" else
+                         f"rms residual of the {measure[len('rms_'):]} constraints")
         label = (f"cloth {report.get('cloth_size')}²" if scene == "cloth" else
                  f"FEM bar {report.get('bar_size')}×{report.get('bar_size')}×{4 * report.get('bar_size', 0)}"
                  if scene == "bar" else scene)
@@ -355,13 +369,13 @@ def plot_convergence(report, path, dpi):
                                                  ("strategies", "gs under each colouring strategy"))):
             ax = axes[index][column]
             for run, curves in entry.get(group, {}).items():
-                rms = [math.nan if v is None else v for v in curves["rms"]]
+                rms = [math.nan if v is None else v for v in curves.get(measure, curves["rms"])]
                 ax.plot(range(len(rms)), rms, label=run, linewidth=1.2)
-                summary.append([label, group[:-1] if group == "modes" else "gs / strategy", run,
+                summary.append([label, measure_label, "mode" if group == "modes" else "gs, strategy", run,
                                 f"{rms[0]:.3g}", f"{rms[min(10, len(rms) - 1)]:.3g}", f"{rms[-1]:.3g}"])
             ax.set_yscale("log")
             ax.set_xlabel("iteration")
-            ax.set_ylabel("residual (rms, normalised)")
+            ax.set_ylabel(measure_label.replace("rms residual of", "rms residual,").replace(" constraints", ""))
             ax.set_title(f"{label}: {title}", fontsize=10)
             ax.grid(alpha=0.3, which="both")
             ax.legend(fontsize=7, ncol=2)
@@ -371,16 +385,20 @@ def plot_convergence(report, path, dpi):
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     iterations = report.get("iterations", "K")
-    return table(["scene", "run", "name", "residual at 0", "at 10", f"at {iterations}"], summary)
+    return table(["scene", "measure", "run", "name", "residual at 0", "at 10", f"at {iterations}"],
+                 summary)
 
 
 # ---------------------------------------------------------------- main
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("results", help="the results directory of scripts/bench")
+    parser.add_argument("--out", help="write the plots and summary.md here instead")
     parser.add_argument("--dpi", type=int, default=100)
     args = parser.parse_args()
     directory = args.results
+    target = args.out or directory
+    os.makedirs(target, exist_ok=True)
 
     reports = {name: load_json(directory, f"{name}.json")
                for name in ("bandwidth", "kernels", "solver", "scaling", "coloring")}
@@ -419,12 +437,12 @@ def main():
             out.extend([f"## {title}", "", f"![{title}]({png})", "", text, ""])
 
     section("Kernels", "kernels.png",
-            plot_kernels(benchmark_rows(reports["kernels"]), os.path.join(directory, "kernels.png"), args.dpi))
+            plot_kernels(benchmark_rows(reports["kernels"]), os.path.join(target, "kernels.png"), args.dpi))
     section("Solver thread scaling", "solver_scaling.png",
             plot_solver_scaling(benchmark_rows(reports["solver"]), bandwidth,
-                                os.path.join(directory, "solver_scaling.png"), args.dpi))
+                                os.path.join(target, "solver_scaling.png"), args.dpi))
     size_text, largest = plot_size_scaling(benchmark_rows(reports["scaling"]), bandwidth,
-                                           os.path.join(directory, "size_scaling.png"), args.dpi)
+                                           os.path.join(target, "size_scaling.png"), args.dpi)
     if largest:
         lines = ["Fraction of the bandwidth ceiling reached by gs on the largest scenes:", ""]
         for label, threads, rate, ceiling in largest:
@@ -433,15 +451,15 @@ def main():
         size_text = "\n".join(lines) + "\n\n" + size_text
     section("Size scaling and the bandwidth ceiling", "size_scaling.png", size_text)
     section("Colouring", "coloring.png",
-            plot_coloring(benchmark_rows(reports["coloring"]), os.path.join(directory, "coloring.png"), args.dpi))
+            plot_coloring(benchmark_rows(reports["coloring"]), os.path.join(target, "coloring.png"), args.dpi))
     if convergence:
         section("Convergence", "convergence.png",
-                plot_convergence(convergence, os.path.join(directory, "convergence.png"), args.dpi))
+                plot_convergence(convergence, os.path.join(target, "convergence.png"), args.dpi))
 
-    with open(os.path.join(directory, "summary.md"), "w") as file:
+    with open(os.path.join(target, "summary.md"), "w") as file:
         file.write("\n".join(out))
     print(f"bench_plots: wrote summary.md and {', '.join(written) if written else 'no plots'} "
-          f"in {directory}")
+          f"in {target}")
     return 0
 
 

@@ -4,6 +4,7 @@
 // "+locality" the locality pass, "metis@<k>" METIS parts of k particles), which is how the
 // strategies and METIS's part size were compared on solver throughput.
 //
+// Threads: 1, then 2, 4, … up to the hardware thread count (1 and 2 on a 2-core machine).
 // Scenes (each built once per process): cloth256 and cloth1024, 256² and 1024² cloths in the
 // xz plane pinned at two corners with distance + dihedral constraints; cloth256_distance,
 // distance only; tetbar200k, a 20×20×84 bar of 201,600 FEM tetrahedra fixed at one end.
@@ -28,6 +29,7 @@
 // inverse rest matrix, Poisson ratio).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <memory>
@@ -165,6 +167,16 @@ void BM_PhaseOverhead(benchmark::State& state) {
 }
 BENCHMARK(BM_PhaseOverhead)->Name("solver/phase_overhead")->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime();
 
+/// Thread counts of the thread-scaling benchmarks beyond 1: 2, 4, 8, … below the hardware
+/// thread count, then the hardware thread count itself (just 2 on a 2-core machine).
+std::vector<int> scaling_thread_counts() {
+  const int hardware_threads = std::max(2, int(std::thread::hardware_concurrency()));
+  std::vector<int> counts;
+  for (int threads = 2; threads < hardware_threads; threads *= 2) counts.push_back(threads);
+  counts.push_back(hardware_threads);
+  return counts;
+}
+
 void register_benchmarks() {
   const char* scenes[] = {"cloth256", "cloth256_distance", "cloth1024", "tetbar200k"};
   for (const SolverMode mode :
@@ -178,7 +190,8 @@ void register_benchmarks() {
           });
       b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
       b->Arg(1);
-      if (mode != SolverMode::sequential) b->Arg(2);
+      if (mode != SolverMode::sequential)
+        for (const int threads : scaling_thread_counts()) b->Arg(threads);
     }
   for (const char* strategy : {"greedy", "greedy+locality", "stencil", "stencil+locality",
                                "dsatur", "random", "metis", "metis@1024", "metis@4096",

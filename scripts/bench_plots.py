@@ -78,6 +78,12 @@ def seconds(row):
     return row["real_time"] * scale
 
 
+def cpu_share(row):
+    """CPU time over wall time of the benchmark's main thread: about 1 for a one-thread run
+    on an idle machine; well below 1 when other processes took the core."""
+    return f"{row['cpu_time'] / row['real_time']:.2f}" if row.get("real_time") else "–"
+
+
 def thread_count(name):
     for part in name.split("/"):
         if part.startswith("threads:"):
@@ -194,7 +200,7 @@ def plot_solver_scaling(rows, bandwidth, path, dpi):
                 ceiling = (bandwidth_at(bandwidth, t) / bytes_per
                            if bytes_per and bandwidth_at(bandwidth, t) else None)
                 summary.append([scene, mode, t, si(row["items_per_second"]),
-                                f"{seconds(row) * 1e3:.2f}",
+                                f"{seconds(row) * 1e3:.2f}", cpu_share(row),
                                 si(ceiling) if ceiling else "–",
                                 f"{100 * row['items_per_second'] / ceiling:.0f} %" if ceiling else "–"])
         all_threads = sorted({t for runs in scenes[scene].values() for t in runs})
@@ -211,7 +217,7 @@ def plot_solver_scaling(rows, bandwidth, path, dpi):
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
-    return table(["scene", "mode", "threads", "projections/s", "ms per sweep",
+    return table(["scene", "mode", "threads", "projections/s", "ms per sweep", "CPU / wall",
                   "bandwidth ceiling", "of ceiling"], summary)
 
 
@@ -259,7 +265,7 @@ def plot_size_scaling(rows, bandwidth, path, dpi):
             for (size, row), rate, ceiling in zip(points, rates, ceilings):
                 fraction = rate / ceiling if ceiling else None
                 summary.append([kind_label(kind, size), threads, f"{row.get('particles', 0):,.0f}",
-                                f"{row.get('constraints', 0):,.0f}", si(rate),
+                                f"{row.get('constraints', 0):,.0f}", si(rate), cpu_share(row),
                                 f"{row.get('bytes_per_projection', float('nan')):.0f}",
                                 si(ceiling) if ceiling else "–",
                                 f"{100 * fraction:.1f} %" if fraction else "–"])
@@ -303,7 +309,7 @@ def plot_size_scaling(rows, bandwidth, path, dpi):
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
-    text = table(["scene", "threads", "particles", "constraints", "projections/s",
+    text = table(["scene", "threads", "particles", "constraints", "projections/s", "CPU / wall",
                   "bytes/projection", "bandwidth ceiling", "of ceiling"], summary)
     return text, largest
 

@@ -387,7 +387,8 @@ def plot_convergence(report, path, dpi):
                                 f"{rms[0]:.3g}", f"{rms[min(10, len(rms) - 1)]:.3g}", f"{rms[-1]:.3g}"])
             ax.set_yscale("log")
             ax.set_xlabel("iteration")
-            ax.set_ylabel(measure_label.replace("rms residual of", "rms residual,").replace(" constraints", ""))
+            ax.set_ylabel("rms residual (all constraints)" if measure == "rms" else
+                          f"rms residual ({measure[len('rms_'):]} constraints)")
             ax.set_title(f"{label}: {title}", fontsize=10)
             ax.grid(alpha=0.3, which="both")
             ax.legend(fontsize=7, ncol=2)

@@ -4,6 +4,7 @@
 // "+locality" the locality pass, "metis@<k>" METIS parts of k particles), which is how the
 // strategies and METIS's part size were compared on solver throughput.
 //
+// Threads: 1, then 2, 4, … up to the hardware thread count (1 and 2 on a 2-core machine).
 // Scenes (each built once per process): cloth256 and cloth1024, 256² and 1024² cloths in the
 // xz plane pinned at two corners with distance + dihedral constraints; cloth256_distance,
 // distance only; tetbar200k, a 20×20×84 bar of 201,600 FEM tetrahedra fixed at one end.
@@ -11,13 +12,32 @@
 // is deformed, then times `project(1)`: one sweep over every constraint (XPBD semantics).
 // Residual reports and the finiteness guard are off (they cost per call, not per sweep).
 // Counters: colours (Gauss–Seidel phases), jacobi (constraints in the Jacobi set),
-// colouring_s (time the strategy took), schedule_s.
+// colouring_s (time the strategy took), schedule_s, bytes_per_projection (the traffic model
+// below, mean over the scene's constraints).
+//
+// solver_size/gs/<scene>:<size>/threads:<T>: gs throughput against problem size, for the size
+// scaling plot of scripts/bench: cloth:<N> is an N×N cloth (N = 64 … 2048), tetbar:<n> an
+// n×n×4n-cell FEM bar (n = 10 … 100, about as many particles as the cloths). Counters as above
+// plus particles, constraints and model_bytes_per_second (projections/s × bytes/projection).
+// Only one size scene is kept in memory at a time (the 2048² cloth takes gigabytes).
+//
+// Traffic model, bytes a projection must move between memory and the core when nothing is
+// reused from cache: for each of its N particles, x, y, z and inverse mass gathered (4 reals)
+// and x, y, z scattered (3 reals), plus its N particle indices; per constraint, the rest data
+// the kernel loads, the XPBD compliance, and λ read and written (2 reals). Rest data: distance
+// and dihedral 1 real (length, angle), volume 1 (rest volume), FEM tetra 11 (volume, 3×3
+// inverse rest matrix, Poisson ratio).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <thread>
+#include <utility>
+#include <vector>
 
 #include <tessera/coloring/colouring_statistics.hpp>
 #include <tessera/parallel/solver.hpp>
@@ -41,6 +61,34 @@ const Model& scene(const std::string& name) {
           test::tet_bar_model(20, 20, 84, test::BarMaterial::fem_tetra, Real(1e6)));
   }
   return *slot;
+}
+
+/// Bytes one projection of a constraint of N particles with `rest_reals` reals of rest data
+/// moves under the traffic model above.
+constexpr double modelled_bytes(std::size_t particles, std::size_t rest_reals) {
+  return double(particles * ((4 + 3) * sizeof(Real) + sizeof(ParticleIndex)) +
+                (rest_reals + 1 + 2) * sizeof(Real));
+}
+
+/// The traffic model's mean bytes per projection over every constraint of `model`. Throws for
+/// a family the model does not cover (the benchmark scenes use none).
+double bytes_per_projection(const Model& model) {
+  const ConstraintSets& sets = model.constraints;
+  const std::pair<std::size_t, double> families[] = {
+      {sets.distance.size(), modelled_bytes(2, 1)},
+      {sets.dihedral.size(), modelled_bytes(4, 1)},
+      {sets.volume.size(), modelled_bytes(4, 1)},
+      {sets.fem_tetra.size(), modelled_bytes(4, 11)},
+  };
+  double bytes = 0;
+  std::size_t modelled = 0;
+  for (const auto& [count, per_projection] : families) {
+    bytes += double(count) * per_projection;
+    modelled += count;
+  }
+  if (modelled != sets.size())
+    throw std::logic_error("bytes_per_projection: the scene has a family the model lacks");
+  return modelled ? bytes / double(modelled) : 0.0;
 }
 
 struct TimedColouring {
@@ -91,6 +139,7 @@ void run_solver(benchmark::State& state, SolverMode mode, const std::string& sce
   state.counters["jacobi"] = double(solver.statistics().jacobi_constraints);
   state.counters["colouring_s"] = coloured ? coloured->seconds : 0.0;
   state.counters["schedule_s"] = solver.statistics().seconds_schedule;
+  state.counters["bytes_per_projection"] = bytes_per_projection(model);
 }
 
 constexpr const char* kDefaultStrategy = "greedy";
@@ -118,6 +167,16 @@ void BM_PhaseOverhead(benchmark::State& state) {
 }
 BENCHMARK(BM_PhaseOverhead)->Name("solver/phase_overhead")->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime();
 
+/// Thread counts of the thread-scaling benchmarks beyond 1: 2, 4, 8, … below the hardware
+/// thread count, then the hardware thread count itself (just 2 on a 2-core machine).
+std::vector<int> scaling_thread_counts() {
+  const int hardware_threads = std::max(2, int(std::thread::hardware_concurrency()));
+  std::vector<int> counts;
+  for (int threads = 2; threads < hardware_threads; threads *= 2) counts.push_back(threads);
+  counts.push_back(hardware_threads);
+  return counts;
+}
+
 void register_benchmarks() {
   const char* scenes[] = {"cloth256", "cloth256_distance", "cloth1024", "tetbar200k"};
   for (const SolverMode mode :
@@ -131,7 +190,8 @@ void register_benchmarks() {
           });
       b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
       b->Arg(1);
-      if (mode != SolverMode::sequential) b->Arg(2);
+      if (mode != SolverMode::sequential)
+        for (const int threads : scaling_thread_counts()) b->Arg(threads);
     }
   for (const char* strategy : {"greedy", "greedy+locality", "stencil", "stencil+locality",
                                "dsatur", "random", "metis", "metis@1024", "metis@4096",
@@ -143,6 +203,70 @@ void register_benchmarks() {
             run_solver(state, SolverMode::gs, scene_name, strategy);
           });
       b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(1)->Arg(2);
+    }
+}
+
+/// The scene of the size sweep now in memory with its greedy colouring: "cloth:<N>" or
+/// "tetbar:<n>". Benchmarks run in registration order, so each size is built once.
+struct SizeScene {
+  std::string name;
+  std::unique_ptr<Model> model;
+  Colouring colouring;
+};
+
+const SizeScene& size_scene(const std::string& kind, std::size_t size) {
+  static SizeScene current;
+  const std::string name = kind + ":" + std::to_string(size);
+  if (current.name != name) {
+    current = SizeScene{};  // free the previous scene before building the next
+    if (kind == "cloth")
+      current.model = std::make_unique<Model>(test::cloth_model(size, size));
+    else
+      current.model = std::make_unique<Model>(
+          test::tet_bar_model(size, size, 4 * size, test::BarMaterial::fem_tetra, Real(1e6)));
+    current.colouring = test::colour_model(*current.model, kDefaultStrategy);
+    current.name = name;
+  }
+  return current;
+}
+
+void BM_SolverSize(benchmark::State& state, const std::string& kind, std::size_t size) {
+  const SizeScene& scene = size_scene(kind, size);
+  SolverSettings settings;
+  settings.threads = std::size_t(state.range(0));
+  settings.iterations = 1;
+  settings.report_residuals = false;
+  settings.check_finite = false;
+  Solver solver(*scene.model, scene.colouring, settings);
+  solver.step();
+  for (auto _ : state) solver.project(1, settings.time_step);
+  const auto constraints = std::int64_t(scene.model->constraints.size());
+  state.SetItemsProcessed(state.iterations() * constraints);
+  const double bytes = bytes_per_projection(*scene.model);
+  state.counters["bytes_per_projection"] = bytes;
+  state.counters["model_bytes_per_second"] = benchmark::Counter(
+      double(state.iterations()) * double(constraints) * bytes, benchmark::Counter::kIsRate);
+  state.counters["particles"] = double(scene.model->particles.size());
+  state.counters["constraints"] = double(constraints);
+  state.counters["colours"] = double(solver.statistics().coloured_phases);
+}
+
+void register_size_benchmarks() {
+  const int hardware_threads = int(std::thread::hardware_concurrency());
+  const std::pair<const char*, std::vector<std::size_t>> sweeps[] = {
+      {"cloth", {64, 128, 256, 512, 1024, 2048}},
+      {"tetbar", {10, 16, 25, 40, 63, 100}},
+  };
+  for (const auto& [kind, sizes] : sweeps)
+    for (const std::size_t size : sizes) {
+      const std::string scene_kind = kind;
+      const std::string name = "solver_size/gs/" + scene_kind + ":" + std::to_string(size);
+      auto* b = benchmark::RegisterBenchmark(
+          name.c_str(), [scene_kind, size](benchmark::State& state) {
+            BM_SolverSize(state, scene_kind, size);
+          });
+      b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(1);
+      if (hardware_threads > 1) b->Arg(hardware_threads);
     }
 }
 
@@ -167,6 +291,6 @@ BENCHMARK_CAPTURE(BM_BlockSize, tetbar200k, std::string("tetbar200k"))
     ->Name("solver/block_size/tetbar200k")->ArgName("block")->RangeMultiplier(4)
     ->Range(64, 16384)->UseRealTime()->Unit(benchmark::kMillisecond);
 
-const int kRegistered = (register_benchmarks(), 0);
+const int kRegistered = (register_benchmarks(), register_size_benchmarks(), 0);
 
 }  // namespace

@@ -56,15 +56,13 @@ int color_command(const ColorOptions& options) {
   const double seconds_graph =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - graph_start).count();
 
-  std::unique_ptr<tbb::task_arena> arena =
-      options.threads ? std::make_unique<tbb::task_arena>(int(*options.threads))
-                      : std::make_unique<tbb::task_arena>();
+  tbb::task_arena arena(options.threads ? int(*options.threads) : tbb::task_arena::automatic);
   const ColouringOptions colouring_options{
       .seed = options.seed, .balance = options.balance, .locality = options.locality};
   nlohmann::ordered_json results = nlohmann::ordered_json::array();
   for (const std::string& name : names) {
     ColouringRun run;
-    arena->execute([&] { run = run_colouring(registry.get(name), graph, colouring_options); });
+    arena.execute([&] { run = run_colouring(registry.get(name), graph, colouring_options); });
     const ColouringStatistics& s = run.statistics;
     const auto colours = run.colouring.colours();
     nlohmann::ordered_json entry;
@@ -92,7 +90,7 @@ int color_command(const ColorOptions& options) {
                 "%zu threads\n",
                 description.name.c_str(), scene.model.particles.size(), graph.constraint_count(),
                 graph.colour_lower_bound(), seconds_graph,
-                std::size_t(arena->max_concurrency()));
+                std::size_t(arena.max_concurrency()));
     std::printf("%-16s %7s %8s %8s %9s %9s %8s %9s %9s  %s\n", "strategy", "colours",
                 "/bound", "largest", "smallest", "balance", "lg/sm", "seconds", "valid", "hash");
     for (const auto& entry : results)

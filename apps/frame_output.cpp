@@ -55,7 +55,6 @@ void FrameOutput::add_constraint_cells(const Model& model, const Colouring* colo
     cells.constraint.push_back(std::int32_t(id));
   };
   model.constraints.for_each([&](ConstraintFamily family, const auto& batch) {
-    using Batch = std::decay_t<decltype(batch)>;
     if constexpr (requires { batch.particles.particle; }) {
       constexpr int arity = decltype(batch.particles)::kParticlesPerConstraint;
       const auto& p = batch.particles.particle;
@@ -79,7 +78,6 @@ void FrameOutput::add_constraint_cells(const Model& model, const Colouring* colo
         }
       }
     }
-    (void)sizeof(Batch);
   });
   for (Cells* cells : {&lines, &triangles, &tetrahedra})
     if (!cells->colour.empty()) cells_.push_back(std::move(*cells));

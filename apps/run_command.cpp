@@ -99,12 +99,10 @@ int run_command(const RunOptions& options) {
   // Colouring, in an arena of the solver's thread count (its result does not depend on it).
   const auto colouring_start = std::chrono::steady_clock::now();
   const ConstraintGraph graph = constraint_graph(scene.model);
-  std::unique_ptr<tbb::task_arena> arena =
-      simulation.threads ? std::make_unique<tbb::task_arena>(int(simulation.threads))
-                         : std::make_unique<tbb::task_arena>();
+  tbb::task_arena arena(simulation.threads ? int(simulation.threads) : tbb::task_arena::automatic);
   std::optional<ColouringRun> colouring;
   if (mode != SolverMode::sequential)
-    arena->execute([&] {
+    arena.execute([&] {
       colouring = run_colouring(strategy, graph,
                                 ColouringOptions{.balance = options.balance, .locality = true});
     });

@@ -135,7 +135,7 @@ class ObjectReader {
     const Json* value = find(key);
     if (!value) return;
     const std::string need = low == 0 ? "a non-negative integer" : "a positive integer";
-    if (!value->is_number_integer() || (value->is_number_integer() && value->get<std::int64_t>() < 0))
+    if (!value->is_number_integer() || value->get<std::int64_t>() < 0)
       fail(key_name(key) + " must be " + need + ", not " + show(*value));
     const auto number = value->get<std::uint64_t>();
     if (number < low || number > std::uint64_t(1) << 31)
@@ -249,7 +249,10 @@ SceneDescription describe(const Json& json, const std::string& name,
   if (generator) {
     std::string spec;
     reader.read_string("generator", spec);
-    if (spec.rfind("cloth", 0) != 0 && spec.rfind("bar", 0) != 0)
+    const auto names = [&](const std::string& kind) {
+      return spec == kind || spec.rfind(kind + ":", 0) == 0;
+    };
+    if (!names("cloth") && !names("bar"))  // never a path: a scene file opens no other file
       reader.fail("'generator' must be \"cloth\", \"cloth:CxR\", \"bar\" or \"bar:XxYxZ\", not " +
                   ObjectReader::show(*generator));
     try {

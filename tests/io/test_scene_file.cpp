@@ -143,6 +143,8 @@ TEST(SceneFile, ErrorsNameTheKeyOrTheLine) {
             "lowest-y, lowest-z, highest-x, highest-y, highest-z)");
   EXPECT_EQ(json_error(R"({"generator": "sphere"})"),
             "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"bar\" or \"bar:XxYxZ\", not \"sphere\"");
+  EXPECT_EQ(json_error(R"({"generator": "clothes.json"})"),
+            "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"bar\" or \"bar:XxYxZ\", not \"clothes.json\"");
   EXPECT_EQ(json_error(R"({"generator": "cloth:1"})"),
             "scene.json: 'generator': scene 'cloth:1': a cloth needs at least 2 vertices per side");
   EXPECT_EQ(json_error(R"({"frames": 3})"),

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <tessera/coloring/colouring.hpp>
+#include <tessera/core/huge_pages.hpp>
 
 namespace tessera::detail {
 
@@ -23,7 +24,7 @@ class ParticleColourMasks {
  public:
   ParticleColourMasks(std::size_t particle_count, std::size_t colour_capacity)
       : particle_count_(particle_count), words_(words_for(colour_capacity)),
-        bits_(particle_count * words_, 0) {}
+        bits_(make_large_vector<std::uint64_t>(particle_count * words_, 0)) {}
 
   std::size_t capacity() const { return words_ * 64; }
 
@@ -31,7 +32,7 @@ class ParticleColourMasks {
   void reserve(std::size_t colour_count) {
     const std::size_t words = words_for(colour_count);
     if (words <= words_) return;
-    std::vector<std::uint64_t> wider(particle_count_ * words, 0);
+    std::vector<std::uint64_t> wider = make_large_vector<std::uint64_t>(particle_count_ * words, 0);
     for (std::size_t p = 0; p < particle_count_; ++p)
       for (std::size_t w = 0; w < words_; ++w) wider[p * words + w] = bits_[p * words_ + w];
     bits_ = std::move(wider);

@@ -7,16 +7,28 @@
 #include <string>
 
 #include <tessera/core/error.hpp>
+#include <tessera/core/huge_pages.hpp>
 
 namespace tessera {
 namespace {
 
 std::vector<std::uint32_t> colour_offsets_of(std::span<const Colour> colour_of) {
-  Colour largest = 0;
-  for (Colour k : colour_of) largest = std::max(largest, k);
-  const std::size_t count = colour_of.empty() ? 0 : std::size_t(largest) + 1;
-  std::vector<std::uint32_t> offsets(count + 1, 0);
-  for (Colour k : colour_of) ++offsets[k + 1];
+  // One pass: the counts grow with the largest colour seen (rarely, so the branch is free).
+  // Dense colours are below the constraint count; a larger one is refused before it sizes the
+  // counts (a stray "uncoloured" marker would ask for 2^32 of them).
+  std::vector<std::uint32_t> offsets(1, 0);
+  for (std::size_t c = 0; c < colour_of.size(); ++c) {
+    const std::size_t k = colour_of[c];
+    if (k + 1 >= offsets.size()) {
+      if (k >= colour_of.size())
+        throw InvalidInput("colouring: constraint " + std::to_string(c) + " has colour " +
+                           std::to_string(k) + ", but " + std::to_string(colour_of.size()) +
+                           " constraints need at most that many colours (colours must be dense)");
+      offsets.resize(k + 2, 0);
+    }
+    ++offsets[k + 1];
+  }
+  const std::size_t count = offsets.size() - 1;
   for (std::size_t k = 0; k < count; ++k) {
     if (offsets[k + 1] == 0)
       throw InvalidInput("colouring: colour " + std::to_string(k) + " of " +
@@ -31,7 +43,7 @@ std::vector<std::uint32_t> colour_offsets_of(std::span<const Colour> colour_of) 
 Colouring Colouring::from_colours(std::vector<Colour> colour_of_constraint) {
   Colouring colouring;
   colouring.offsets_ = colour_offsets_of(colour_of_constraint);
-  colouring.constraints_by_colour_.resize(colour_of_constraint.size());
+  colouring.constraints_by_colour_ = make_large_vector<ConstraintIndex>(colour_of_constraint.size());
   if (!colouring.offsets_.empty()) {
     std::vector<std::uint32_t> cursor(colouring.offsets_.begin(), colouring.offsets_.end() - 1);
     for (std::size_t c = 0; c < colour_of_constraint.size(); ++c)
@@ -57,7 +69,7 @@ Colouring Colouring::from_colours(std::vector<Colour> colour_of_constraint,
   }
   Colouring colouring;
   colouring.offsets_ = colour_offsets_of(colour_of_constraint);
-  colouring.constraints_by_colour_.resize(colour_of_constraint.size());
+  colouring.constraints_by_colour_ = make_large_vector<ConstraintIndex>(colour_of_constraint.size());
   if (!colouring.offsets_.empty()) {
     std::vector<std::uint32_t> cursor(colouring.offsets_.begin(), colouring.offsets_.end() - 1);
     for (ConstraintIndex c : constraint_order)

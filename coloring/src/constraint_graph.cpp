@@ -12,6 +12,7 @@
 #include <limits>
 
 #include <tessera/core/error.hpp>
+#include <tessera/core/huge_pages.hpp>
 
 namespace tessera {
 namespace {
@@ -98,7 +99,7 @@ ConstraintGraph::ConstraintGraph(std::span<const Real> inverse_masses,
                        " particle indices do not fit 32-bit constraint and offset indices");
 
   // Pass 1: validate, count movable incidences per constraint and per particle.
-  constraint_offsets_.assign(total_constraints + 1, 0);
+  constraint_offsets_ = make_large_vector<std::uint32_t>(total_constraints + 1, 0);
   particle_offsets_.assign(particle_count + 1, 0);
   std::vector<std::uint32_t> last_named_by(particle_count, std::numeric_limits<std::uint32_t>::max());
   ConstraintIndex global = 0;
@@ -135,8 +136,8 @@ ConstraintGraph::ConstraintGraph(std::span<const Real> inverse_masses,
   if (total_constraints > 0) lower_bound_ = std::max<std::size_t>(lower_bound_, 1);
 
   // Pass 2: fill both directions in constraint order.
-  constraint_particles_.resize(constraint_offsets_.back());
-  particle_constraints_.resize(particle_offsets_.back());
+  constraint_particles_ = make_large_vector<ParticleIndex>(constraint_offsets_.back());
+  particle_constraints_ = make_large_vector<ConstraintIndex>(particle_offsets_.back());
   std::vector<std::uint32_t> particle_cursor(particle_offsets_.begin(), particle_offsets_.end() - 1);
   global = 0;
   std::uint32_t write = 0;

@@ -24,6 +24,7 @@
 #include <tbb/parallel_for.h>
 
 #include <tessera/coloring/colouring_strategy.hpp>
+#include <tessera/core/huge_pages.hpp>
 #include <tessera/coloring/particle_partition.hpp>
 
 #include "colour_masks.hpp"
@@ -75,7 +76,7 @@ class MetisStrategy final : public ColouringStrategy {
       for (ConstraintIndex c : order) grouped[cursor[part_of_constraint[c]]++] = c;
     }
 
-    std::vector<Colour> colours(count, 0);
+    std::vector<Colour> colours = make_large_vector<Colour>(count, 0);
     detail::ParticleColourMasks masks(graph.particle_count(),
                                       std::max<std::size_t>(graph.colour_lower_bound(), 64));
     // Crossing constraints first, sequentially: they are the constrained ones (their particles

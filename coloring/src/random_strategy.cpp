@@ -27,6 +27,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <tessera/coloring/colouring_strategy.hpp>
+#include <tessera/core/huge_pages.hpp>
 
 #include "colour_masks.hpp"
 
@@ -75,7 +76,7 @@ class JonesPlassmannStrategy final : public ColouringStrategy {
     });
     std::vector<std::uint32_t> head(offsets.begin(), offsets.end() - (particle_count > 0 ? 1 : 0));
 
-    std::vector<Colour> colours(count, kUncoloured);
+    std::vector<Colour> colours = make_large_vector<Colour>(count, kUncoloured);
     std::vector<std::uint8_t> queued(count, 0);
     detail::ParticleColourMasks masks(particle_count, graph.colour_lower_bound());
     auto is_ready = [&](ConstraintIndex c) {

@@ -25,6 +25,7 @@
 #include <numeric>
 
 #include <tessera/coloring/colouring_strategy.hpp>
+#include <tessera/core/huge_pages.hpp>
 #include <tessera/coloring/refinement.hpp>
 
 #include "colour_masks.hpp"
@@ -52,7 +53,7 @@ std::size_t first_fit_in_order(const ConstraintGraph& graph, std::span<const Con
 
 std::size_t first_fit_in_id_order(const ConstraintGraph& graph, ParticleColourMasks& masks,
                                   std::span<Colour> colours) {
-  constexpr std::size_t kPrefetchDistance = 16;
+  constexpr std::size_t kPrefetchDistance = 32;
   const std::size_t count = graph.constraint_count();
   Colour largest = 0;
   std::size_t c = 0;
@@ -68,8 +69,9 @@ std::size_t first_fit_in_id_order(const ConstraintGraph& graph, ParticleColourMa
       const std::uint32_t begin = offsets[c], end = offsets[c + 1];
       // Constraints without a movable particle have no entries: the offset ahead may be the
       // end of the particle array (which is empty, its data() null, when none has any).
-      if (c + kPrefetchDistance < count && offsets[c + kPrefetchDistance] < offsets[count])
-        __builtin_prefetch(&bits[particles[offsets[c + kPrefetchDistance]]]);
+      if (c + kPrefetchDistance < count)
+        for (std::uint32_t j = offsets[c + kPrefetchDistance]; j < offsets[c + kPrefetchDistance + 1]; ++j)
+          __builtin_prefetch(&bits[particles[j]]);
       std::uint64_t taken = 0;
       for (std::uint32_t j = begin; j < end; ++j) taken |= bits[particles[j]];
       if (taken == ~std::uint64_t(0)) break;  // a 65th colour: the general loop grows the sets
@@ -270,7 +272,7 @@ using detail::smallest_last_order;
 using detail::ParticleColourMasks;
 
 Colouring colour_first_fit(const ConstraintGraph& graph, std::span<const ConstraintIndex> order) {
-  std::vector<Colour> colours(graph.constraint_count(), 0);
+  std::vector<Colour> colours = make_large_vector<Colour>(graph.constraint_count(), 0);
   ParticleColourMasks masks(graph.particle_count(), graph.colour_lower_bound());
   detail::first_fit_in_order(graph, order, masks, colours);
   return Colouring::from_colours(std::move(colours));
@@ -284,7 +286,7 @@ Colouring colour_first_fit(const ConstraintGraph& graph, std::span<const Constra
 /// touched, which grows one coloured front like the classic algorithm.
 Colouring colour_dsatur(const ConstraintGraph& graph) {
   const std::size_t count = graph.constraint_count();
-  std::vector<Colour> colours(count, 0);
+  std::vector<Colour> colours = make_large_vector<Colour>(count, 0);
   if (count == 0) return Colouring::from_colours(std::move(colours));
   ParticleColourMasks masks(graph.particle_count(), graph.colour_lower_bound());
   std::vector<std::uint8_t> coloured(count, 0);
@@ -335,7 +337,7 @@ class FirstFitStrategy final : public ColouringStrategy {
     return "first-fit in input order (the usual PBD baseline)";
   }
   Colouring colour(const ConstraintGraph& graph, const ColouringOptions&) const override {
-    std::vector<Colour> colours(graph.constraint_count(), 0);
+    std::vector<Colour> colours = make_large_vector<Colour>(graph.constraint_count(), 0);
     ParticleColourMasks masks(graph.particle_count(), graph.colour_lower_bound());
     detail::first_fit_in_id_order(graph, masks, colours);
     return Colouring::from_colours(std::move(colours));

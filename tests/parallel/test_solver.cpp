@@ -18,6 +18,7 @@
 #include <tessera/parallel/solver.hpp>
 
 #include "scenes.hpp"
+#include "test_support.hpp"
 
 namespace tessera {
 namespace {
@@ -87,6 +88,10 @@ TEST(Solver, ModesReachTheSameRestShape) {
   const double bar_jacobi = max_distance(settle(bar, SolverMode::jacobi, 100), bar_reference);
   std::printf("jacobi bar %.3g\n", bar_jacobi);
   EXPECT_LT(bar_jacobi, 0.08);
+  // Jacobi's convergence on the cloth is a numerical property that the plain builds check; the
+  // 525 iterations x 300 steps would be half a minute of an instrumented run that looks for
+  // bad accesses and races, which the runs above already cover in every mode.
+  if (test::kSanitizedBuild) return;
   const double jacobi_25 = max_distance(settle(cloth, SolverMode::jacobi, 25), cloth_reference);
   const double jacobi_100 = max_distance(settle(cloth, SolverMode::jacobi, 100), cloth_reference);
   const double jacobi_400 = max_distance(settle(cloth, SolverMode::jacobi, 400), cloth_reference);
@@ -393,9 +398,12 @@ TEST(Solver, LongRunStaysFiniteWithBoundedEnergy) {
   Solver solver = make_solver(model, settings);
   const double initial = energy(solver, settings.gravity);
   double highest = initial;
-  for (int s = 1; s <= 10000; ++s) {
+  // 10,000 steps; 1,000 in a sanitized build (see kSanitizedBuild), still every colour of
+  // this 64 x 64 cloth cut into several work blocks. The soak test runs 100,000 substeps.
+  const int steps = test::kSanitizedBuild ? 1000 : 10000;
+  for (int s = 1; s <= steps; ++s) {
     solver.step();
-    if (s % 500 == 0) {
+    if (s % (steps / 20) == 0) {
       const double e = energy(solver, settings.gravity);
       ASSERT_TRUE(std::isfinite(e)) << "step " << s;
       highest = std::max(highest, e);

@@ -217,6 +217,18 @@ TEST(ErrorCatalogue, EmptyModelIsNotAnError) {
   }
 }
 
+// ---- colourings made by hand or by a user's strategy ----------------------------------------
+
+TEST(ErrorCatalogue, ColouringWithAGapOrAnOutOfRangeColour) {
+  EXPECT_EQ(invalid_input([] { Colouring::from_colours({0, 2, 0}); }),
+            "colouring: colour 1 of 3 is empty (colours must be dense)");
+  // A colour no dense colouring can reach (a strategy's "uncoloured" marker, say) is refused
+  // before it sizes anything.
+  EXPECT_EQ(invalid_input([] { Colouring::from_colours({0, 1, 0xFFFFFFFFu}); }),
+            "colouring: constraint 2 has colour 4294967295, but 3 constraints need at most "
+            "that many colours (colours must be dense)");
+}
+
 // ---- names --------------------------------------------------------------------------------
 
 TEST(ErrorCatalogue, UnknownStrategyName) {

@@ -19,6 +19,22 @@
 
 namespace tessera::test {
 
+/// True in a build instrumented by AddressSanitizer or ThreadSanitizer (scripts/sanitize,
+/// scripts/tsan). Long-running tests shorten their loops there: the instrumented code runs
+/// 5-20 times slower, and what those builds look for (a bad access, a race) shows in the
+/// first steps as surely as in the ten-thousandth; the full lengths run in the plain builds.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+inline constexpr bool kSanitizedBuild = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+inline constexpr bool kSanitizedBuild = true;
+#else
+inline constexpr bool kSanitizedBuild = false;
+#endif
+#else
+inline constexpr bool kSanitizedBuild = false;
+#endif
+
 /// Round-off scale of Real: about 1e-7 for float, 1e-16 for double.
 inline constexpr Real kEpsilon = std::numeric_limits<Real>::epsilon();
 /// Relative tolerance for results that should agree "to round-off" after a few dozen flops.

@@ -1,10 +1,14 @@
 // AlignedVector<T>: a std::vector whose storage starts on a kSimdAlignment-byte boundary, so
 // SIMD loads of its lanes never split a cache line. Every SoA array of the hot path uses it.
+// Large allocations are advised to use huge pages (see huge_pages.hpp): these arrays are
+// filled right after they are allocated.
 #pragma once
 
 #include <cstddef>
 #include <new>
 #include <vector>
+
+#include <tessera/core/huge_pages.hpp>
 
 namespace tessera {
 
@@ -18,7 +22,9 @@ struct AlignedAllocator {
   template <class U>
   AlignedAllocator(const AlignedAllocator<U>&) noexcept {}
   T* allocate(std::size_t n) {
-    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(kSimdAlignment)));
+    T* data = static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(kSimdAlignment)));
+    advise_huge_pages(data, n * sizeof(T));
+    return data;
   }
   void deallocate(T* p, std::size_t) noexcept {
     ::operator delete(p, std::align_val_t(kSimdAlignment));

@@ -59,7 +59,7 @@ class JonesPlassmannStrategy final : public ColouringStrategy {
   Colouring colour(const ConstraintGraph& graph, const ColouringOptions& options) const override {
     const std::size_t count = graph.constraint_count();
     const std::size_t particle_count = graph.particle_count();
-    std::vector<std::uint64_t> key(count);
+    std::vector<std::uint64_t> key = make_large_vector<std::uint64_t>(count);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const auto& range) {
       for (std::size_t c = range.begin(); c != range.end(); ++c)
         key[c] = (detail::mix_hash(options.seed, c) & 0xFFFFFFFF00000000ull) | c;
@@ -67,17 +67,18 @@ class JonesPlassmannStrategy final : public ColouringStrategy {
 
     // Per-particle lists by decreasing key.
     const auto offsets = graph.particle_offsets();
-    std::vector<ConstraintIndex> ranked(graph.particle_constraints().begin(),
-                                        graph.particle_constraints().end());
+    std::vector<ConstraintIndex> ranked = make_large_vector<ConstraintIndex>(graph.incidence_count());
+    std::copy(graph.particle_constraints().begin(), graph.particle_constraints().end(), ranked.begin());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particle_count, 512), [&](const auto& range) {
       for (std::size_t p = range.begin(); p != range.end(); ++p)
         std::sort(ranked.begin() + offsets[p], ranked.begin() + offsets[p + 1],
                   [&](ConstraintIndex a, ConstraintIndex b) { return key[a] > key[b]; });
     });
-    std::vector<std::uint32_t> head(offsets.begin(), offsets.end() - (particle_count > 0 ? 1 : 0));
+    std::vector<std::uint32_t> head = make_large_vector<std::uint32_t>(particle_count);
+    std::copy(offsets.begin(), offsets.begin() + particle_count, head.begin());
 
     std::vector<Colour> colours = make_large_vector<Colour>(count, kUncoloured);
-    std::vector<std::uint8_t> queued(count, 0);
+    std::vector<std::uint8_t> queued = make_large_vector<std::uint8_t>(count, 0);
     detail::ParticleColourMasks masks(particle_count, graph.colour_lower_bound());
     auto is_ready = [&](ConstraintIndex c) {
       for (ParticleIndex p : graph.particles_of(c))

@@ -24,8 +24,8 @@
 #include <tbb/parallel_for.h>
 
 #include <tessera/coloring/colouring_strategy.hpp>
-#include <tessera/core/huge_pages.hpp>
 #include <tessera/coloring/particle_partition.hpp>
+#include <tessera/core/huge_pages.hpp>
 
 #include "colour_masks.hpp"
 

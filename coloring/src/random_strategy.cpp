@@ -65,17 +65,20 @@ class JonesPlassmannStrategy final : public ColouringStrategy {
         key[c] = (detail::mix_hash(options.seed, c) & 0xFFFFFFFF00000000ull) | c;
     });
 
-    // Per-particle lists by decreasing key.
+    // Per-particle lists by decreasing key, copied, sorted and given their heads in one
+    // parallel pass (a serial copy of the incidences first would not scale).
     const auto offsets = graph.particle_offsets();
+    const auto by_particle = graph.particle_constraints();
     std::vector<ConstraintIndex> ranked = make_large_vector<ConstraintIndex>(graph.incidence_count());
-    std::copy(graph.particle_constraints().begin(), graph.particle_constraints().end(), ranked.begin());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particle_count, 512), [&](const auto& range) {
-      for (std::size_t p = range.begin(); p != range.end(); ++p)
-        std::sort(ranked.begin() + offsets[p], ranked.begin() + offsets[p + 1],
-                  [&](ConstraintIndex a, ConstraintIndex b) { return key[a] > key[b]; });
-    });
     std::vector<std::uint32_t> head = make_large_vector<std::uint32_t>(particle_count);
-    std::copy(offsets.begin(), offsets.begin() + particle_count, head.begin());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particle_count, 512), [&](const auto& range) {
+      for (std::size_t p = range.begin(); p != range.end(); ++p) {
+        const auto first = ranked.begin() + offsets[p], last = ranked.begin() + offsets[p + 1];
+        std::copy(by_particle.begin() + offsets[p], by_particle.begin() + offsets[p + 1], first);
+        std::sort(first, last, [&](ConstraintIndex a, ConstraintIndex b) { return key[a] > key[b]; });
+        head[p] = offsets[p];
+      }
+    });
 
     std::vector<Colour> colours = make_large_vector<Colour>(count, kUncoloured);
     std::vector<std::uint8_t> queued = make_large_vector<std::uint8_t>(count, 0);
@@ -132,9 +135,11 @@ class JonesPlassmannStrategy final : public ColouringStrategy {
           for (ParticleIndex p : graph.particles_of(frontier[i])) {
             if (head[p] == offsets[p + 1]) continue;
             const ConstraintIndex next = ranked[head[p]];
-            if (!is_ready(next)) continue;
-            if (std::atomic_ref<std::uint8_t>(queued[next]).exchange(1, std::memory_order_relaxed) == 0)
-              local.push_back(next);
+            // Test before test-and-set: a constraint already queued (found through another of
+            // its particles) costs a plain load, not a locked exchange on a shared line.
+            std::atomic_ref<std::uint8_t> flag(queued[next]);
+            if (flag.load(std::memory_order_relaxed) != 0 || !is_ready(next)) continue;
+            if (flag.exchange(1, std::memory_order_relaxed) == 0) local.push_back(next);
           }
         }
       });

@@ -540,10 +540,16 @@ class ColourBalancer {
       for (std::size_t i = 0; i < component_.size() && bounded; ++i) {
         const ConstraintIndex x = component_[i];
         const Colour other = colours_[x] == a ? b : a;
+        // The walk is bound by cache misses (owner rows and particle lists of constraints
+        // around c, tens of MB on large meshes): start the loads of a member's rows together,
+        // and a new member's list as soon as it is found.
+        for (ParticleIndex p : particles_of(x)) __builtin_prefetch(&owner_[std::size_t(p) * count_ + other]);
         for (ParticleIndex p : particles_of(x)) {
           const ConstraintIndex y = owner_[std::size_t(p) * count_ + other];
           if (y == kNone || std::find(component_.begin(), component_.end(), y) != component_.end()) continue;
           component_.push_back(y);
+          __builtin_prefetch(&offsets_[y]);
+          __builtin_prefetch(&colours_[y]);
           surplus += other == a ? 1 : -1;
           // Too big, or too many of b to end with a surplus even if all the rest were of a.
           if (component_.size() > kKempeComponentLimit ||

@@ -509,12 +509,23 @@ class ColourBalancer {
     const Colour a = colours_[c];
     if (!at_or_above_mean(a) || sizes_[a] < smallest_ + 2 || evaluations_left_ == 0) return false;
     const auto particles = particles_of(c);
+    // Candidates first (c's own owner rows, in cache), so only the few kept are sorted.
     targets_.clear();
     for (std::size_t w = 0; w < masks_.words(); ++w)
       for (std::uint64_t blocked = masks_.taken_word(particles, w); blocked != 0; blocked &= blocked - 1) {
         const Colour b = static_cast<Colour>(w * 64 + std::countr_zero(blocked));
         if (b >= count_) break;
-        if (b != a && sizes_[b] + 2 <= sizes_[a]) targets_.push_back(b);
+        if (b == a || sizes_[b] + 2 > sizes_[a]) continue;
+        ConstraintIndex only = kNone;
+        bool single = true;
+        for (ParticleIndex p : particles) {
+          const ConstraintIndex n = owner_[std::size_t(p) * count_ + b];
+          if (n == kNone || n == only) continue;
+          single = only == kNone;
+          only = n;
+          if (!single) break;
+        }
+        if (single) targets_.push_back(b);
       }
     std::sort(targets_.begin(), targets_.end(),
               [&](Colour x, Colour y) { return sizes_[x] < sizes_[y] || (sizes_[x] == sizes_[y] && x < y); });
@@ -522,16 +533,6 @@ class ColourBalancer {
     bool moved = false;
     for (Colour b : targets_) {
       if (evaluations >= kEvaluationsPerTry) break;
-      ConstraintIndex only = kNone;
-      bool single = true;
-      for (ParticleIndex p : particles) {
-        const ConstraintIndex n = owner_[std::size_t(p) * count_ + b];
-        if (n == kNone || n == only) continue;
-        single = only == kNone;
-        only = n;
-        if (!single) break;
-      }
-      if (!single) continue;
       ++evaluations;
       component_.clear();
       component_.push_back(c);

@@ -24,11 +24,14 @@ Colouring reduce_colours(const ConstraintGraph& graph, const Colouring& colourin
 /// Evens out colour sizes without adding colours. Sweeps the constraints colour by colour and
 /// moves a constraint when that lowers the sum of squared colour sizes: into the smallest
 /// colour free at all its particles, or by ejection (into a colour b whose constraints at its
-/// particles each move on to the smallest colour then free for them). Stops once the largest
-/// and smallest colours are within 0.5 % of the mean (at least 1 apart), when progress stalls
-/// (a sweep moving under 0.1 % of the constraints, or 1/16 of a sweep under 1 %), or when a
-/// work budget of a few sweeps' worth of candidate moves is spent; it may stop short of
-/// perfect balance (at the lower bound, colour sizes are often forced by the mesh).
+/// particles each move on to the smallest colour then free for them); when that stalls short
+/// of balance, by Kempe swaps (a large colour and a smaller one exchange colours over a small
+/// connected group of their constraints holding more of the large one). Stops once the
+/// largest and smallest colours are within 0.5 % of the mean (at least 1 apart), when
+/// progress stalls (a sweep moving under 0.1 % of the constraints, or 1/16 of a sweep under
+/// 1 %), or when a work budget of a few sweeps' worth of candidate moves per phase is spent;
+/// it may stop short of perfect balance (at the lower bound, colour sizes are often forced by
+/// the mesh).
 /// Single-threaded and deterministic. The particle renumbering of `colouring`, if any, is
 /// kept, and so is the relative order of constraints in each colour.
 Colouring balance_colours(const ConstraintGraph& graph, const Colouring& colouring);

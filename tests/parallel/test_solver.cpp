@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <random>
 #include <string>
@@ -26,32 +25,14 @@ namespace {
 using test::BarMaterial;
 using test::ClothBending;
 
-constexpr SolverMode kModes[] = {SolverMode::gs, SolverMode::jacobi, SolverMode::hybrid,
-                                 SolverMode::sequential};
-
-std::string name_of(SolverMode mode) { return std::string(solver_mode_name(mode)); }
-
-Solver make_solver(const Model& model, SolverSettings settings, const char* strategy = "greedy",
-                   ColouringOptions options = {}) {
-  if (settings.mode == SolverMode::sequential) return Solver(model, settings);
-  const ConstraintGraph graph = constraint_graph(model);
-  return Solver(model,
-                run_colouring(ColouringRegistry::with_builtin_strategies().get(strategy), graph,
-                              options)
-                    .colouring,
-                settings);
-}
+using test::make_solver;
+using test::same_bits;
 
 double max_distance(const std::vector<Vector3r>& a, const std::vector<Vector3r>& b) {
   double result = 0;
   for (std::size_t i = 0; i < a.size(); ++i)
     result = std::max(result, double((a[i] - b[i]).norm()));
   return result;
-}
-
-bool same_bits(const std::vector<Vector3r>& a, const std::vector<Vector3r>& b) {
-  return a.size() == b.size() &&
-         std::memcmp(a.data(), b.data(), a.size() * sizeof(Vector3r)) == 0;
 }
 
 /// The shape a model settles into (heavily damped, `iterations` per step).
@@ -77,10 +58,10 @@ TEST(Solver, ModesReachTheSameRestShape) {
   const auto cloth_reference = settle(cloth, SolverMode::sequential, 100);
   const auto bar_reference = settle(bar, SolverMode::sequential, 100);
   for (const SolverMode mode : {SolverMode::gs, SolverMode::hybrid}) {
-    SCOPED_TRACE(name_of(mode));
+    SCOPED_TRACE(test::mode_name(mode));
     const double cloth_distance = max_distance(settle(cloth, mode, 100), cloth_reference);
     const double bar_distance = max_distance(settle(bar, mode, 100), bar_reference);
-    std::printf("%s cloth %.3g bar %.3g\n", name_of(mode).c_str(), cloth_distance, bar_distance);
+    std::printf("%s cloth %.3g bar %.3g\n", test::mode_name(mode).c_str(), cloth_distance, bar_distance);
     EXPECT_LT(cloth_distance, 0.01);
     // hybrid: most colours of this small bar are below the threshold and go to Jacobi.
     EXPECT_LT(bar_distance, mode == SolverMode::gs ? 0.02 : 0.06);
@@ -105,8 +86,8 @@ TEST(Solver, EveryModeReducesTheResidualOverIterations) {
   for (const auto& [name, model] :
        {std::pair{"cloth", test::cloth_model(12, 12)},
         std::pair{"bar", test::tet_bar_model(2, 2, 8, BarMaterial::fem_tetra, Real(1e5))}}) {
-    for (const SolverMode mode : kModes) {
-      SCOPED_TRACE(std::string(name) + " " + name_of(mode));
+    for (const SolverMode mode : test::kSolverModes) {
+      SCOPED_TRACE(std::string(name) + " " + test::mode_name(mode));
       SolverSettings settings;
       settings.mode = mode;
       settings.iterations = 30;
@@ -129,10 +110,10 @@ TEST(Solver, AnyThreadCountGivesBitwiseTheSameStateForEveryModeAndStrategy) {
   const Model models[] = {test::cloth_model(12, 10, ClothBending::dihedral, Real(1e-3), Real(1e-6)),
                           test::tet_bar_model(2, 2, 5, BarMaterial::fem_tetra, Real(1e5))};
   for (const Model& model : models)
-    for (const SolverMode mode : kModes)
+    for (const SolverMode mode : test::kSolverModes)
       for (const auto strategy : ColouringRegistry::with_builtin_strategies().names()) {
         if (mode == SolverMode::sequential && strategy != "greedy") continue;
-        SCOPED_TRACE(name_of(mode) + " " + std::string(strategy));
+        SCOPED_TRACE(test::mode_name(mode) + " " + std::string(strategy));
         std::vector<Vector3r> result[2];
         std::uint64_t projections[2];
         for (const std::size_t threads : {1, 2}) {
@@ -155,8 +136,8 @@ TEST(Solver, AnyThreadCountGivesBitwiseTheSameStateForEveryModeAndStrategy) {
 
 TEST(Solver, StaticParticlesStayExactlyWhereTheyAre) {
   const Model model = test::cloth_model(8, 8);
-  for (const SolverMode mode : kModes) {
-    SCOPED_TRACE(name_of(mode));
+  for (const SolverMode mode : test::kSolverModes) {
+    SCOPED_TRACE(test::mode_name(mode));
     SolverSettings settings;
     settings.mode = mode;
     Solver solver = make_solver(model, settings, "metis");
@@ -175,7 +156,7 @@ TEST(Solver, GaussSeidelConservesLinearMomentumOfAFreeBody) {
   std::uniform_real_distribution<Real> jitter(-0.5, 0.5);
   for (std::size_t p = 0; p < model.particles.size(); ++p) model.particles.inverse_mass[p] = 1;
   for (const SolverMode mode : {SolverMode::gs, SolverMode::sequential}) {
-    SCOPED_TRACE(name_of(mode));
+    SCOPED_TRACE(test::mode_name(mode));
     SolverSettings settings;
     settings.mode = mode;
     settings.gravity = Vector3r::Zero();
@@ -213,7 +194,7 @@ TEST(Solver, LambdaAndPositionsMapBackToTheUsersNumbering) {
   model.particles = ParticleState(now, std::vector<Real>(2 * n, Real(1)));
   model.constraints.distance = make_distance_constraints({pairs, rest, 1, compliance});
   for (const SolverMode mode : {SolverMode::gs, SolverMode::jacobi, SolverMode::sequential}) {
-    SCOPED_TRACE(name_of(mode));
+    SCOPED_TRACE(test::mode_name(mode));
     SolverSettings settings;
     settings.mode = mode;
     ColouringOptions options;
@@ -310,13 +291,13 @@ TEST(Solver, DynamicConstraintsAreProjectedEveryIterationAndCanBeReplaced) {
     const Real t = std::clamp((x[point] - a).dot(b - a) / (b - a).squaredNorm(), Real(0), Real(1));
     return (x[point] - (a + t * (b - a))).norm();
   };
-  for (const SolverMode mode : kModes) {
+  for (const SolverMode mode : test::kSolverModes) {
     std::vector<Vector3r> reference;  // greedy keeps the numbering, metis renumbers
     for (const char* strategy : {"greedy", "metis"}) {
       if (mode == SolverMode::sequential && std::string(strategy) != "greedy") continue;
       std::vector<Vector3r> result[2];
       for (const std::size_t threads : {1, 2}) {
-        SCOPED_TRACE(name_of(mode) + " " + strategy + " threads " + std::to_string(threads));
+        SCOPED_TRACE(test::mode_name(mode) + " " + strategy + " threads " + std::to_string(threads));
         SolverSettings settings;
         settings.mode = mode;
         settings.threads = threads;
@@ -360,8 +341,8 @@ TEST(Solver, AStepThatOverflowsIsUndoneAndReported) {
   // A time step so long that h² g overflows: the first step must throw and leave every
   // position and velocity exactly as before, in every mode.
   const Model model = test::cloth_model(6, 6);
-  for (const SolverMode mode : kModes) {
-    SCOPED_TRACE(name_of(mode));
+  for (const SolverMode mode : test::kSolverModes) {
+    SCOPED_TRACE(test::mode_name(mode));
     SolverSettings settings;
     settings.mode = mode;
     settings.time_step = Real(10) * std::sqrt(std::numeric_limits<Real>::max());

@@ -6,7 +6,6 @@
 // before it. The API never hands NaN back to the user.
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -22,23 +21,11 @@
 namespace tessera {
 namespace {
 
-constexpr SolverMode kModes[] = {SolverMode::gs, SolverMode::jacobi, SolverMode::hybrid,
-                                 SolverMode::sequential};
-
-std::string name_of(SolverMode mode) { return std::string(solver_mode_name(mode)); }
-
-Solver make_solver(const Model& model, SolverSettings settings) {
-  if (settings.mode == SolverMode::sequential) return Solver(model, settings);
-  return Solver(model, test::colour_model(model), settings);
-}
+using test::make_solver;
+using test::same_bits;
 
 bool all_finite(const std::vector<Vector3r>& points) {
   return std::all_of(points.begin(), points.end(), [](const Vector3r& p) { return p.allFinite(); });
-}
-
-bool same_bits(const std::vector<Vector3r>& a, const std::vector<Vector3r>& b) {
-  return a.size() == b.size() &&
-         std::memcmp(a.data(), b.data(), a.size() * sizeof(Vector3r)) == 0;
 }
 
 /// Steps `steps` times checking the promise after each; returns how many steps threw
@@ -84,8 +71,8 @@ TEST(Numerics, InvertedAndCompressedTetrahedraRecoverWithHandleInversion) {
   const Model model = test::tet_bar_model(2, 2, 4, test::BarMaterial::fem_tetra);
   ASSERT_TRUE(model.constraints.fem_tetra.handle_inversion);
   for (const bool mirror : {true, false}) {
-    for (const SolverMode mode : kModes) {
-      SCOPED_TRACE(name_of(mode) + (mirror ? " mirrored" : " squashed"));
+    for (const SolverMode mode : test::kSolverModes) {
+      SCOPED_TRACE(test::mode_name(mode) + (mirror ? " mirrored" : " squashed"));
       SolverSettings settings;
       settings.mode = mode;
       settings.gravity = Vector3r::Zero();
@@ -120,8 +107,8 @@ TEST(Numerics, ExtremeComplianceStaysFinite) {
   // distance and bending constraints.
   for (const Real compliance : {Real(0), Real(1e-12), Real(1e12)}) {
     const Model model = test::cloth_model(6, 6, test::ClothBending::dihedral, compliance, compliance);
-    for (const SolverMode mode : kModes) {
-      SCOPED_TRACE(name_of(mode) + " compliance " + std::to_string(compliance));
+    for (const SolverMode mode : test::kSolverModes) {
+      SCOPED_TRACE(test::mode_name(mode) + " compliance " + std::to_string(compliance));
       SolverSettings settings;
       settings.mode = mode;
       Solver solver = make_solver(model, settings);
@@ -141,8 +128,8 @@ TEST(Numerics, ExtremeComplianceStaysFinite) {
 TEST(Numerics, ExtremeStiffnessAndYoungsModulusStayFinite) {
   for (const Real youngs_modulus : {Real(1e-12), Real(1e12)}) {
     const Model model = test::tet_bar_model(2, 2, 4, test::BarMaterial::fem_tetra, youngs_modulus);
-    for (const SolverMode mode : kModes) {
-      SCOPED_TRACE(name_of(mode) + " E " + std::to_string(youngs_modulus));
+    for (const SolverMode mode : test::kSolverModes) {
+      SCOPED_TRACE(test::mode_name(mode) + " E " + std::to_string(youngs_modulus));
       SolverSettings settings;
       settings.mode = mode;
       Solver solver = make_solver(model, settings);
@@ -157,8 +144,8 @@ TEST(Numerics, ExtremeStiffnessAndYoungsModulusStayFinite) {
               model.constraints.distance.stiffness.end(), stiffness);
     std::fill(model.constraints.dihedral.stiffness.begin(),
               model.constraints.dihedral.stiffness.end(), stiffness);
-    for (const SolverMode mode : kModes) {
-      SCOPED_TRACE(name_of(mode) + " stiffness " + std::to_string(stiffness));
+    for (const SolverMode mode : test::kSolverModes) {
+      SCOPED_TRACE(test::mode_name(mode) + " stiffness " + std::to_string(stiffness));
       SolverSettings settings;
       settings.mode = mode;
       settings.semantics = ConstraintSemantics::stiffness;
@@ -178,8 +165,8 @@ TEST(Numerics, TinyAndHugeTimeSteps) {
   const Model bar = test::tet_bar_model(2, 2, 4);
   for (const Real dt : {Real(1e-9), Real(1e-6), Real(1), Real(100)}) {
     for (const Model* model : {&cloth, &bar}) {
-      for (const SolverMode mode : kModes) {
-        SCOPED_TRACE(name_of(mode) + " dt " + std::to_string(dt));
+      for (const SolverMode mode : test::kSolverModes) {
+        SCOPED_TRACE(test::mode_name(mode) + " dt " + std::to_string(dt));
         SolverSettings settings;
         settings.mode = mode;
         settings.time_step = dt;
@@ -201,8 +188,8 @@ TEST(Numerics, TinyAndHugeTimeSteps) {
 TEST(Numerics, OverflowingTimeStepIsRefusedNotWritten) {
   // h·g overflows: each of several steps is refused, and a refused step changes nothing.
   const Model model = test::cloth_model(6, 6);
-  for (const SolverMode mode : kModes) {
-    SCOPED_TRACE(name_of(mode));
+  for (const SolverMode mode : test::kSolverModes) {
+    SCOPED_TRACE(test::mode_name(mode));
     SolverSettings settings;
     settings.mode = mode;
     settings.time_step = std::numeric_limits<Real>::max() / 4;
@@ -221,8 +208,8 @@ TEST(Numerics, RunawayVelocityIsRefusedWhenItOverflows) {
   // refused and changes nothing.
   const Model model = test::cloth_model(6, 6);
   const Vector3r thrown(std::numeric_limits<Real>::max() / 2, 0, 0);
-  for (const SolverMode mode : kModes) {
-    SCOPED_TRACE(name_of(mode));
+  for (const SolverMode mode : test::kSolverModes) {
+    SCOPED_TRACE(test::mode_name(mode));
     SolverSettings settings;
     settings.mode = mode;
     settings.time_step = Real(1);
@@ -275,8 +262,8 @@ TEST(Numerics, GreedyColouringOfConstraintsWithoutMovableParticles) {
 
 TEST(Numerics, ProjectionThatOverflowsIsRefused) {
   const Model model = test::cloth_model(6, 6);
-  for (const SolverMode mode : kModes) {
-    SCOPED_TRACE(name_of(mode));
+  for (const SolverMode mode : test::kSolverModes) {
+    SCOPED_TRACE(test::mode_name(mode));
     SolverSettings settings;
     settings.mode = mode;
     Solver solver = make_solver(model, settings);
@@ -318,8 +305,8 @@ TEST(Numerics, CoordinatesAroundAMillion) {
       m.particles = ParticleState(positions, masses);
       return m;
     }();
-    for (const SolverMode mode : kModes) {
-      SCOPED_TRACE(name_of(mode) + (use_bar ? " bar" : " cloth"));
+    for (const SolverMode mode : test::kSolverModes) {
+      SCOPED_TRACE(test::mode_name(mode) + (use_bar ? " bar" : " cloth"));
       SolverSettings settings;
       settings.mode = mode;
       Solver solver = make_solver(far, settings);
@@ -344,8 +331,8 @@ TEST(Numerics, AllParticlesStaticNeverMove) {
     // Stretched out of the rest shape, so every constraint would move them if it could.
     for (Vector3r& p : positions) p *= Real(1.5);
     model.particles = ParticleState(positions, std::vector<Real>(positions.size(), Real(0)));
-    for (const SolverMode mode : kModes) {
-      SCOPED_TRACE(name_of(mode) + (use_bar ? " bar" : " cloth"));
+    for (const SolverMode mode : test::kSolverModes) {
+      SCOPED_TRACE(test::mode_name(mode) + (use_bar ? " bar" : " cloth"));
       SolverSettings settings;
       settings.mode = mode;
       Solver solver = make_solver(model, settings);

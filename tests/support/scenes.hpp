@@ -4,11 +4,15 @@
 #pragma once
 
 #include <cstddef>
+#include <cstring>
+#include <string>
 #include <vector>
 
+#include <tessera/coloring/colouring_statistics.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/io/generators.hpp>
 #include <tessera/parallel/model.hpp>
+#include <tessera/parallel/solver.hpp>
 
 namespace tessera::test {
 
@@ -63,6 +67,31 @@ inline Colouring colour_model(const Model& model, const char* strategy = "greedy
                               ColouringOptions options = {}) {
   const ConstraintGraph graph = constraint_graph(model);
   return ColouringRegistry::with_builtin_strategies().get(strategy).colour(graph, options);
+}
+
+/// Every solver mode, for the tests that run each.
+inline constexpr SolverMode kSolverModes[] = {SolverMode::gs, SolverMode::jacobi,
+                                              SolverMode::hybrid, SolverMode::sequential};
+
+inline std::string mode_name(SolverMode mode) { return std::string(solver_mode_name(mode)); }
+
+/// A solver of the model: coloured by a built-in strategy (with the options' post-passes), or
+/// without a colouring in sequential mode, which needs none.
+inline Solver make_solver(const Model& model, SolverSettings settings, const char* strategy = "greedy",
+                          ColouringOptions options = {}) {
+  if (settings.mode == SolverMode::sequential) return Solver(model, settings);
+  const ConstraintGraph graph = constraint_graph(model);
+  return Solver(model,
+                run_colouring(ColouringRegistry::with_builtin_strategies().get(strategy), graph,
+                              options)
+                    .colouring,
+                settings);
+}
+
+/// Bitwise equality of two position arrays (determinism and "nothing changed" checks).
+inline bool same_bits(const std::vector<Vector3r>& a, const std::vector<Vector3r>& b) {
+  return a.size() == b.size() &&
+         std::memcmp(a.data(), b.data(), a.size() * sizeof(Vector3r)) == 0;
 }
 
 }  // namespace tessera::test

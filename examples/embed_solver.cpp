@@ -11,7 +11,8 @@
 
 #include <tessera/coloring/colouring_statistics.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
-#include <tessera/parallel/model.hpp>
+#include <tessera/coloring/model_graph.hpp>
+#include <tessera/core/model.hpp>
 #include <tessera/parallel/residual.hpp>
 #include <tessera/parallel/solver.hpp>
 

@@ -11,6 +11,7 @@
 
 #include "kernels/batch_loop-inl.h"
 #include "kernels/dihedral-inl.h"
+#include "kernels/residual_lanes-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
@@ -29,17 +30,32 @@ void ProjectDihedralConstraints(ParticleArrays particles, DihedralConstraints& c
       });
 }
 
+void DihedralResiduals(const ParticleArrays& particles, const DihedralConstraints& batch,
+                       std::size_t begin, std::size_t end, Real* out) {
+  residual_lanes<4>(particles, batch.particles, begin, end, out,
+                    [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
+                      return lane_abs(dihedral_constraint(p[0], p[1], p[2], p[3],
+                                                          load(batch.rest_angle.data(), i))
+                                          .C);
+                    });
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include <tessera/core/position_based_dynamics.hpp>
+#include <tessera/core/xpbd.hpp>
+
+#include "sequential_loop.hpp"
 #include "constraint_validation.hpp"
 #include "degenerate_shape.hpp"
 
 namespace tessera {
 
 HWY_EXPORT(ProjectDihedralConstraints);
+HWY_EXPORT(DihedralResiduals);
 
 DihedralConstraints make_dihedral_constraints(const DihedralConstraintInput& input) {
   namespace lanes = HWY_NAMESPACE;
@@ -83,6 +99,38 @@ void project_dihedral_constraints(ParticleArrays particles, DihedralConstraints&
   check_projection_range(DihedralConstraints::kFamily, begin, end, constraints.size(),
                          constraints.particles.particle_count, particles);
   HWY_DYNAMIC_DISPATCH(ProjectDihedralConstraints)(particles, constraints, begin, end, settings);
+}
+
+void constraint_residuals(const ParticleArrays& particles, const DihedralConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(DihedralResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, DihedralConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& settings) {
+  check_projection_range(DihedralConstraints::kFamily, begin, end, batch.size(),
+                         batch.particles.particle_count, particles);
+  if (detail::uses_compliance(settings)) {
+    detail::project_in_order<4>(
+        particles, batch.particles, begin, end,
+        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+          XPBD::solve_DihedralConstraint(
+              s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
+              s.inverse_mass[2], s.position[3], s.inverse_mass[3], batch.rest_angle[c],
+              batch.compliance[c], settings.dt, batch.lambda[c], corr[0], corr[1], corr[2],
+              corr[3]);
+        });
+  } else {
+    detail::project_in_order<4>(
+        particles, batch.particles, begin, end,
+        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+          PositionBasedDynamics::solve_DihedralConstraint(s.position[0], s.inverse_mass[0], s.position[1],
+                                        s.inverse_mass[1], s.position[2], s.inverse_mass[2],
+                                        s.position[3], s.inverse_mass[3], batch.rest_angle[c],
+                                        batch.stiffness[c], corr[0], corr[1], corr[2], corr[3]);
+        });
+  }
 }
 
 }  // namespace tessera

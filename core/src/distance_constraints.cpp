@@ -10,6 +10,7 @@
 
 #include "kernels/batch_loop-inl.h"
 #include "kernels/distance-inl.h"
+#include "kernels/residual_lanes-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
@@ -28,16 +29,31 @@ void ProjectDistanceConstraints(ParticleArrays particles, DistanceConstraints& c
       });
 }
 
+void DistanceResiduals(const ParticleArrays& particles, const DistanceConstraints& batch,
+                       std::size_t begin, std::size_t end, Real* out) {
+  residual_lanes<2>(particles, batch.particles, begin, end, out,
+                    [&](const Vec3<RealLanes> (&p)[2], std::size_t i) {
+                      const RealLanes rest_length = load(batch.rest_length.data(), i);
+                      return relative(distance_constraint(p[0], p[1], rest_length).C,
+                                      rest_length);
+                    });
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include <tessera/core/position_based_dynamics.hpp>
+#include <tessera/core/xpbd.hpp>
+
+#include "sequential_loop.hpp"
 #include "constraint_validation.hpp"
 
 namespace tessera {
 
 HWY_EXPORT(ProjectDistanceConstraints);
+HWY_EXPORT(DistanceResiduals);
 
 DistanceConstraints make_distance_constraints(const DistanceConstraintInput& input) {
   const detail::ConstraintValidator validator(DistanceConstraints::kFamily,
@@ -70,6 +86,35 @@ void project_distance_constraints(ParticleArrays particles, DistanceConstraints&
   check_projection_range(DistanceConstraints::kFamily, begin, end, constraints.size(),
                          constraints.particles.particle_count, particles);
   HWY_DYNAMIC_DISPATCH(ProjectDistanceConstraints)(particles, constraints, begin, end, settings);
+}
+
+void constraint_residuals(const ParticleArrays& particles, const DistanceConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(DistanceResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, DistanceConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& settings) {
+  check_projection_range(DistanceConstraints::kFamily, begin, end, batch.size(),
+                         batch.particles.particle_count, particles);
+  if (detail::uses_compliance(settings)) {
+    detail::project_in_order<2>(particles, batch.particles, begin, end,
+                        [&](std::size_t c, const detail::ConstraintStencil<2>& s, Vector3r(&corr)[2]) {
+                          XPBD::solve_DistanceConstraint(
+                              s.position[0], s.inverse_mass[0], s.position[1],
+                              s.inverse_mass[1], batch.rest_length[c], batch.compliance[c],
+                              settings.dt, batch.lambda[c], corr[0], corr[1]);
+                        });
+  } else {
+    detail::project_in_order<2>(particles, batch.particles, begin, end,
+                        [&](std::size_t c, const detail::ConstraintStencil<2>& s, Vector3r(&corr)[2]) {
+                          PositionBasedDynamics::solve_DistanceConstraint(
+                              s.position[0], s.inverse_mass[0], s.position[1],
+                              s.inverse_mass[1], batch.rest_length[c], batch.stiffness[c],
+                              corr[0], corr[1]);
+                        });
+  }
 }
 
 }  // namespace tessera

@@ -13,6 +13,7 @@
 
 #include "kernels/batch-inl.h"
 #include "kernels/fem-inl.h"
+#include "kernels/strain_residual-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
@@ -75,11 +76,19 @@ void ProjectFEMTetraConstraints(ParticleArrays particles, FEMTetraConstraints& c
   }
 }
 
+void FEMTetraResiduals(const ParticleArrays& particles, const FEMTetraConstraints& batch,
+                       std::size_t begin, std::size_t end, Real* out) {
+  tetra_strain_residuals(particles, batch, begin, end, out);
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include <tessera/core/xpbd.hpp>
+
+#include "sequential_loop.hpp"
 #include <cmath>
 #include <string>
 
@@ -89,6 +98,7 @@ HWY_AFTER_NAMESPACE();
 
 namespace tessera {
 HWY_EXPORT(ProjectFEMTetraConstraints);
+HWY_EXPORT(FEMTetraResiduals);
 
 FEMTetraConstraints make_fem_tetra_constraints(const FEMTetraConstraintInput& input) {
   const detail::ConstraintValidator validator(FEMTetraConstraints::kFamily,
@@ -129,6 +139,41 @@ void project_fem_tetra_constraints(ParticleArrays particles, FEMTetraConstraints
   check_projection_range(FEMTetraConstraints::kFamily, begin, end, constraints.size(),
                          constraints.particles.particle_count, particles);
   HWY_DYNAMIC_DISPATCH(ProjectFEMTetraConstraints)(particles, constraints, begin, end, settings);
+}
+
+void constraint_residuals(const ParticleArrays& particles, const FEMTetraConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(FEMTetraResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, FEMTetraConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& settings) {
+  check_projection_range(FEMTetraConstraints::kFamily, begin, end, batch.size(),
+                         batch.particles.particle_count, particles);
+  if (detail::uses_compliance(settings)) {
+    detail::project_in_order<4>(
+        particles, batch.particles, begin, end,
+        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+          XPBD::solve_FEMTetraConstraint(
+              s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
+              s.inverse_mass[2], s.position[3], s.inverse_mass[3], batch.volume[c],
+              detail::rest_inverse_of<3>(batch.rest_inverse, c), batch.poisson_ratio[c],
+              batch.compliance[c], batch.handle_inversion, settings.dt, batch.lambda[c],
+              corr[0], corr[1], corr[2], corr[3]);
+        });
+  } else {
+    detail::project_in_order<4>(
+        particles, batch.particles, begin, end,
+        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+          PositionBasedDynamics::solve_FEMTetraConstraint(
+              s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
+              s.inverse_mass[2], s.position[3], s.inverse_mass[3], batch.volume[c],
+              detail::rest_inverse_of<3>(batch.rest_inverse, c), batch.youngs_modulus[c],
+              batch.poisson_ratio[c], batch.handle_inversion, corr[0], corr[1], corr[2],
+              corr[3]);
+        });
+  }
 }
 
 }  // namespace tessera

@@ -12,6 +12,7 @@
 
 #include "kernels/batch-inl.h"
 #include "kernels/fem-inl.h"
+#include "kernels/strain_residual-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
@@ -45,11 +46,18 @@ void ProjectFEMTriangleConstraints(ParticleArrays particles,
   }
 }
 
+void FEMTriangleResiduals(const ParticleArrays& particles, const FEMTriangleConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out) {
+  triangle_strain_residuals(particles, batch, begin, end, out);
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+
+#include "sequential_loop.hpp"
 #include <cmath>
 #include <string>
 
@@ -60,6 +68,7 @@ HWY_AFTER_NAMESPACE();
 namespace tessera {
 
 HWY_EXPORT(ProjectFEMTriangleConstraints);
+HWY_EXPORT(FEMTriangleResiduals);
 
 FEMTriangleConstraints make_fem_triangle_constraints(const FEMTriangleConstraintInput& input) {
   const detail::ConstraintValidator validator(FEMTriangleConstraints::kFamily,
@@ -109,6 +118,28 @@ void project_fem_triangle_constraints(ParticleArrays particles,
   check_projection_range(FEMTriangleConstraints::kFamily, begin, end, constraints.size(),
                          constraints.particles.particle_count, particles);
   HWY_DYNAMIC_DISPATCH(ProjectFEMTriangleConstraints)(particles, constraints, begin, end);
+}
+
+void constraint_residuals(const ParticleArrays& particles, const FEMTriangleConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(FEMTriangleResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, const FEMTriangleConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& /*settings: PBD form only*/) {
+  check_projection_range(FEMTriangleConstraints::kFamily, begin, end, batch.size(),
+                         batch.particles.particle_count, particles);
+  detail::project_in_order<3>(particles, batch.particles, begin, end,
+                      [&](std::size_t c, const detail::ConstraintStencil<3>& s, Vector3r(&corr)[3]) {
+                        PositionBasedDynamics::solve_FEMTriangleConstraint(
+                            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1],
+                            s.position[2], s.inverse_mass[2], batch.area[c],
+                            detail::rest_inverse_of<2>(batch.rest_inverse, c), batch.youngs_modulus_x[c],
+                            batch.youngs_modulus_y[c], batch.youngs_modulus_shear[c],
+                            batch.poisson_ratio_xy[c], batch.poisson_ratio_yx[c], corr[0],
+                            corr[1], corr[2]);
+                      });
 }
 
 }  // namespace tessera

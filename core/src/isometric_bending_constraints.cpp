@@ -12,6 +12,7 @@
 
 #include "kernels/batch_loop-inl.h"
 #include "kernels/isometric_bending-inl.h"
+#include "kernels/residual_lanes-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
@@ -34,11 +35,28 @@ void ProjectIsometricBendingConstraints(ParticleArrays particles,
       });
 }
 
+void IsometricBendingResiduals(const ParticleArrays& particles,
+                               const IsometricBendingConstraints& batch, std::size_t begin,
+                               std::size_t end, Real* out) {
+  residual_lanes<4>(particles, batch.particles, begin, end, out,
+                    [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
+                      const RealLanes k[4] = {
+                          load(batch.factor[0].data(), i), load(batch.factor[1].data(), i),
+                          load(batch.factor[2].data(), i), load(batch.factor[3].data(), i)};
+                      // C = ½ |u|² ≥ 0, so |u| = sqrt(2C).
+                      return lane_sqrt(splat<RealLanes>(2.0) *
+                                       isometric_bending_constraint(p, k).C);
+                    });
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include <tessera/core/xpbd.hpp>
+
+#include "sequential_loop.hpp"
 #include <tessera/core/position_based_dynamics.hpp>
 
 #include "constraint_validation.hpp"
@@ -48,6 +66,7 @@ HWY_AFTER_NAMESPACE();
 namespace tessera {
 
 HWY_EXPORT(ProjectIsometricBendingConstraints);
+HWY_EXPORT(IsometricBendingResiduals);
 
 Matrix4r IsometricBendingConstraints::matrix(std::size_t c) const {
   const Vector4r k(factor[0][c], factor[1][c], factor[2][c], factor[3][c]);
@@ -96,6 +115,39 @@ void project_isometric_bending_constraints(ParticleArrays particles,
                          constraints.particles.particle_count, particles);
   HWY_DYNAMIC_DISPATCH(ProjectIsometricBendingConstraints)(particles, constraints, begin, end,
                                                            settings);
+}
+
+void constraint_residuals(const ParticleArrays& particles,
+                          const IsometricBendingConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(IsometricBendingResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, IsometricBendingConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& settings) {
+  check_projection_range(IsometricBendingConstraints::kFamily, begin, end, batch.size(),
+                         batch.particles.particle_count, particles);
+  if (detail::uses_compliance(settings)) {
+    detail::project_in_order<4>(
+        particles, batch.particles, begin, end,
+        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+          XPBD::solve_IsometricBendingConstraint(
+              s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
+              s.inverse_mass[2], s.position[3], s.inverse_mass[3], batch.matrix(c),
+              batch.compliance[c], settings.dt, batch.lambda[c], corr[0], corr[1], corr[2],
+              corr[3]);
+        });
+  } else {
+    detail::project_in_order<4>(
+        particles, batch.particles, begin, end,
+        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+          PositionBasedDynamics::solve_IsometricBendingConstraint(
+              s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
+              s.inverse_mass[2], s.position[3], s.inverse_mass[3], batch.matrix(c),
+              batch.stiffness[c], corr[0], corr[1], corr[2], corr[3]);
+        });
+  }
 }
 
 }  // namespace tessera

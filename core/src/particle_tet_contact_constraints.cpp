@@ -12,6 +12,7 @@
 
 #include "kernels/batch-inl.h"
 #include "kernels/particle_tet_contact-inl.h"
+#include "kernels/residual_lanes-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
@@ -123,11 +124,38 @@ void SolveParticleTetContactVelocities(ParticleArrays velocities,
   }
 }
 
+void ParticleTetContactResiduals(const ParticleArrays& particles,
+                                 const ParticleTetContacts& batch, std::size_t begin,
+                                 std::size_t end, Real* out) {
+  residual_lanes<5>(
+      particles, batch.particles, begin, end, out,
+      [&](const Vec3<RealLanes> (&p)[5], std::size_t i) {
+        const Vec3<RealLanes> tet[4] = {p[1], p[2], p[3], p[4]};
+        const Vec3<RealLanes> bary = {load(batch.barycentric[0].data(), i),
+                                      load(batch.barycentric[1].data(), i),
+                                      load(batch.barycentric[2].data(), i)};
+        const Vec3<RealLanes> normal = {load(batch.normal[0].data(), i),
+                                        load(batch.normal[1].data(), i),
+                                        load(batch.normal[2].data(), i)};
+        // As constraint_residual: one position solve from λ = 0 with a unit effective mass
+        // and no masses accumulates λ = max(0, −C), the penetration depth.
+        const RealLanes z = zero<RealLanes>();
+        const RealLanes no_mass[4] = {z, z, z, z};
+        RealLanes penetration = z;
+        contact_position_solve(z, no_mass, p[0], tet, bary, normal, splat<RealLanes>(1.0),
+                               penetration);
+        return penetration;
+      });
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include <tessera/core/position_based_dynamics.hpp>
+
+#include "sequential_loop.hpp"
 #include <cmath>
 #include <string>
 
@@ -138,6 +166,7 @@ namespace tessera {
 HWY_EXPORT(InitParticleTetContacts);
 HWY_EXPORT(ProjectParticleTetContacts);
 HWY_EXPORT(SolveParticleTetContactVelocities);
+HWY_EXPORT(ParticleTetContactResiduals);
 
 namespace {
 
@@ -208,6 +237,37 @@ void solve_particle_tet_contact_velocities(ParticleArrays velocities,
     throw InvalidInput(std::string(ParticleTetContacts::kFamily) +
                        " constraints: time step must be finite and positive");
   HWY_DYNAMIC_DISPATCH(SolveParticleTetContactVelocities)(velocities, contacts, begin, end, dt);
+}
+
+void constraint_residuals(const ParticleArrays& particles, const ParticleTetContacts& batch,
+                          std::size_t begin, std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(ParticleTetContactResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, ParticleTetContacts& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& /*settings: the contact's own rule*/) {
+  check_projection_range(ParticleTetContacts::kFamily, begin, end, batch.size(),
+                         batch.particles.particle_count, particles);
+  // Slot 0 is the particle, slots 1..4 the tet's x[0..3].
+  detail::project_in_order<5>(
+      particles, batch.particles, begin, end,
+      [&](std::size_t c, const detail::ConstraintStencil<5>& s, Vector3r(&corr)[5]) {
+        Matrix3r constraint_info = Matrix3r::Zero();
+        for (int k = 0; k < 3; ++k) {
+          constraint_info(k, 0) = batch.normal[std::size_t(k)][c];
+          constraint_info(k, 1) = batch.tangent[std::size_t(k)][c];
+        }
+        constraint_info(0, 2) = batch.effective_mass[c];
+        constraint_info(1, 2) = batch.max_tangential_impulse[c];
+        constraint_info(2, 2) = batch.normal_speed[c];
+        const Vector3r barycentric(batch.barycentric[0][c], batch.barycentric[1][c],
+                                   batch.barycentric[2][c]);
+        PositionBasedDynamics::solve_ParticleTetContactConstraint(s.inverse_mass[0], s.position[0],
+                                                s.inverse_mass + 1, s.position + 1, barycentric,
+                                                constraint_info, batch.lambda[c], corr[0],
+                                                corr + 1);
+      });
 }
 
 }  // namespace tessera

@@ -14,6 +14,7 @@
 
 #include "kernels/batch_loop-inl.h"
 #include "kernels/proximity-inl.h"
+#include "kernels/residual_lanes-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
@@ -68,11 +69,48 @@ void ProjectEdgeEdgeDistanceConstraints(ParticleArrays particles,
                              });
 }
 
+void EdgePointDistanceResiduals(const ParticleArrays& particles,
+                                const EdgePointDistanceConstraints& batch, std::size_t begin,
+                                std::size_t end, Real* out) {
+  residual_lanes<3>(particles, batch.particles, begin, end, out,
+                    [&](const Vec3<RealLanes> (&p)[3], std::size_t i) {
+                      const RealLanes rest = load(batch.rest_distance.data(), i);
+                      return relative(edge_point_distance_constraint(p[0], p[1], p[2], rest).C,
+                                      rest);
+                    });
+}
+
+void TrianglePointDistanceResiduals(const ParticleArrays& particles,
+                                    const TrianglePointDistanceConstraints& batch,
+                                    std::size_t begin, std::size_t end, Real* out) {
+  residual_lanes<4>(
+      particles, batch.particles, begin, end, out,
+      [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
+        const RealLanes rest = load(batch.rest_distance.data(), i);
+        return relative(triangle_point_distance_constraint(p[0], p[1], p[2], p[3], rest).C,
+                        rest);
+      });
+}
+
+void EdgeEdgeDistanceResiduals(const ParticleArrays& particles,
+                               const EdgeEdgeDistanceConstraints& batch, std::size_t begin,
+                               std::size_t end, Real* out) {
+  residual_lanes<4>(
+      particles, batch.particles, begin, end, out,
+      [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
+        const RealLanes rest = load(batch.rest_distance.data(), i);
+        return relative(edge_edge_distance_constraint(p[0], p[1], p[2], p[3], rest).C, rest);
+      });
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include <tessera/core/position_based_dynamics.hpp>
+
+#include "sequential_loop.hpp"
 #include "constraint_validation.hpp"
 
 namespace tessera {
@@ -123,6 +161,9 @@ void check_proximity_projection(ParticleArrays particles, const Constraints& con
 HWY_EXPORT(ProjectEdgePointDistanceConstraints);
 HWY_EXPORT(ProjectTrianglePointDistanceConstraints);
 HWY_EXPORT(ProjectEdgeEdgeDistanceConstraints);
+HWY_EXPORT(EdgePointDistanceResiduals);
+HWY_EXPORT(TrianglePointDistanceResiduals);
+HWY_EXPORT(EdgeEdgeDistanceResiduals);
 
 EdgePointDistanceConstraints make_edge_point_distance_constraints(
     const ProximityDistanceConstraintInput& input) {
@@ -161,6 +202,66 @@ void project_edge_edge_distance_constraints(ParticleArrays particles,
                                             const ProjectionSettings& settings) {
   check_proximity_projection(particles, constraints, begin, end, settings);
   HWY_DYNAMIC_DISPATCH(ProjectEdgeEdgeDistanceConstraints)(particles, constraints, begin, end);
+}
+
+void constraint_residuals(const ParticleArrays& particles,
+                          const EdgePointDistanceConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(EdgePointDistanceResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, const EdgePointDistanceConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& settings) {
+  detail::check_proximity_call(particles, batch, begin, end, settings);
+  detail::project_in_order<3>(particles, batch.particles, begin, end,
+                      [&](std::size_t c, const detail::ConstraintStencil<3>& s, Vector3r(&corr)[3]) {
+                        PositionBasedDynamics::solve_EdgePointDistanceConstraint(
+                            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1],
+                            s.position[2], s.inverse_mass[2], batch.rest_distance[c],
+                            batch.compression_stiffness[c], batch.stretch_stiffness[c],
+                            corr[0], corr[1], corr[2]);
+                      });
+}
+
+void constraint_residuals(const ParticleArrays& particles,
+                          const TrianglePointDistanceConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(TrianglePointDistanceResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles,
+                          const TrianglePointDistanceConstraints& batch, std::size_t begin,
+                          std::size_t end, const ProjectionSettings& settings) {
+  detail::check_proximity_call(particles, batch, begin, end, settings);
+  detail::project_in_order<4>(particles, batch.particles, begin, end,
+                      [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+                        PositionBasedDynamics::solve_TrianglePointDistanceConstraint(
+                            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1],
+                            s.position[2], s.inverse_mass[2], s.position[3], s.inverse_mass[3],
+                            batch.rest_distance[c], batch.compression_stiffness[c],
+                            batch.stretch_stiffness[c], corr[0], corr[1], corr[2], corr[3]);
+                      });
+}
+
+void constraint_residuals(const ParticleArrays& particles,
+                          const EdgeEdgeDistanceConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(EdgeEdgeDistanceResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, const EdgeEdgeDistanceConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& settings) {
+  detail::check_proximity_call(particles, batch, begin, end, settings);
+  detail::project_in_order<4>(particles, batch.particles, begin, end,
+                      [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+                        PositionBasedDynamics::solve_EdgeEdgeDistanceConstraint(
+                            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1],
+                            s.position[2], s.inverse_mass[2], s.position[3], s.inverse_mass[3],
+                            batch.rest_distance[c], batch.compression_stiffness[c],
+                            batch.stretch_stiffness[c], corr[0], corr[1], corr[2], corr[3]);
+                      });
 }
 
 }  // namespace tessera

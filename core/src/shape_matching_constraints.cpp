@@ -173,11 +173,14 @@ void ProjectShapeMatchingConstraints(ParticleArrays particles,
   }
 }
 
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+
+#include "sequential_loop.hpp"
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -301,6 +304,101 @@ void project_shape_matching_constraints(ParticleArrays particles,
                          constraints.particle_count, particles);
   if (begin == end) return;
   HWY_DYNAMIC_DISPATCH(ProjectShapeMatchingConstraints)(particles, constraints, begin, end);
+}
+
+Real constraint_residual(const ParticleArrays& particles, const ShapeMatchingConstraints& batch,
+                         std::size_t c) {
+  const std::size_t first = batch.offsets[c], last = batch.offsets[c + 1];
+  if (last <= first) return 0;
+  using Point = HWY_NAMESPACE::Vec3<Real>;
+  const auto position_at = [&](ParticleIndex i) -> Point {
+    return {particles.x[i], particles.y[i], particles.z[i]};
+  };
+  const auto rest_offset = [&](std::size_t e) -> Point {
+    return {batch.rest_offset[0][e], batch.rest_offset[1][e], batch.rest_offset[2][e]};
+  };
+  // The centre and A_pq = Σ m (x − c) qᵀ as the kernel forms them.
+  Real total_mass = 0;
+  Point weighted = Point::zeros();
+  for (std::size_t e = first; e < last; ++e) {
+    total_mass += batch.mass[e];
+    weighted += position_at(batch.particle[e]) * batch.mass[e];
+  }
+  const Point centre = weighted * HWY_NAMESPACE::safe_divide(Real(1), total_mass, total_mass > 0);
+  HWY_NAMESPACE::Mat3<Real> a_pq = HWY_NAMESPACE::Mat3<Real>::zeros();
+  for (std::size_t e = first; e < last; ++e) {
+    const Point weighted_offset =
+        (position_at(batch.particle[e]) - centre) * batch.mass[e];
+    const Point q = rest_offset(e);
+    a_pq.col[0] += weighted_offset * q.x;
+    a_pq.col[1] += weighted_offset * q.y;
+    a_pq.col[2] += weighted_offset * q.z;
+  }
+  HWY_NAMESPACE::Mat3<Real> transform;
+  if (batch.allow_stretch) {
+    HWY_NAMESPACE::Mat3<Real> inverse_a_qq;
+    for (std::size_t j = 0; j < 3; ++j)
+      inverse_a_qq.col[j] = {batch.inverse_rest_moment[3 * j][c],
+                             batch.inverse_rest_moment[3 * j + 1][c],
+                             batch.inverse_rest_moment[3 * j + 2][c]};
+    transform = HWY_NAMESPACE::shape_matching_linear(a_pq, inverse_a_qq).T;
+  } else {
+    // Used also where the kernel would call the rotation undetermined (rank A_pq < 2): it is
+    // a proper rotation either way, so the measure stays finite and meaningful.
+    transform = HWY_NAMESPACE::shape_matching_rotation(a_pq).T;
+  }
+  Real goal_distance_squared = 0, rest_offset_squared = 0;
+  for (std::size_t e = first; e < last; ++e) {
+    const Point q = rest_offset(e);
+    const Point to_goal = HWY_NAMESPACE::shape_matching_correction(
+        transform, q, centre, position_at(batch.particle[e]), Real(1));
+    goal_distance_squared += HWY_NAMESPACE::squared_norm(to_goal);
+    rest_offset_squared += HWY_NAMESPACE::squared_norm(q);
+  }
+  // RMS over RMS: the 1/n of both means cancels.
+  if (!(rest_offset_squared > 0)) return 0;
+  return std::sqrt(goal_distance_squared / rest_offset_squared);
+}
+
+void constraint_residuals(const ParticleArrays& particles,
+                          const ShapeMatchingConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out) {
+  // Scalar on purpose: clusters of any size in CSR do not line up in lanes (see the top).
+  for (std::size_t c = begin; c < end; ++c) out[c - begin] = constraint_residual(particles, batch, c);
+}
+
+void project_sequentially(ParticleArrays particles, const ShapeMatchingConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& /*settings: PBD form only*/) {
+  check_projection_range(ShapeMatchingConstraints::kFamily, begin, end, batch.size(),
+                         batch.particle_count, particles);
+  if (begin == end) return;
+  // One buffer per call, sized for the largest cluster: rest offsets, current positions and
+  // corrections (three blocks of Vector3r), and the inverse masses.
+  const std::size_t capacity = batch.max_cluster_size;
+  std::vector<Vector3r> points(3 * capacity);
+  std::vector<Real> inverse_masses(capacity);
+  Vector3r* const rest_offsets = points.data();
+  Vector3r* const current = rest_offsets + capacity;
+  Vector3r* const corrections = current + capacity;
+  const Vector3r rest_centre = Vector3r::Zero();  // x0 holds q = x0 - c0 already
+  for (std::size_t c = begin; c < end; ++c) {
+    const std::size_t first = batch.offsets[c];
+    const std::size_t size = batch.offsets[c + 1] - first;
+    for (std::size_t k = 0; k < size; ++k) {
+      const std::size_t e = first + k;
+      const ParticleIndex i = batch.particle[e];
+      rest_offsets[k] =
+          Vector3r(batch.rest_offset[0][e], batch.rest_offset[1][e], batch.rest_offset[2][e]);
+      current[k] = detail::position_of(particles, i);
+      inverse_masses[k] = particles.inverse_mass[i];
+    }
+    PositionBasedDynamics::solve_ShapeMatchingConstraint(rest_offsets, current, inverse_masses.data(), int(size),
+                                       rest_centre, batch.stiffness[c], batch.allow_stretch,
+                                       corrections);
+    for (std::size_t k = 0; k < size; ++k)
+      detail::add_correction(particles, batch.particle[first + k], inverse_masses[k], corrections[k]);
+  }
 }
 
 }  // namespace tessera

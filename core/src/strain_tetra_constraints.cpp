@@ -11,6 +11,7 @@
 
 #include "kernels/batch-inl.h"
 #include "kernels/strain-inl.h"
+#include "kernels/strain_residual-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
@@ -64,11 +65,18 @@ void ProjectStrainTetraConstraints(ParticleArrays particles,
   }
 }
 
+void StrainTetraResiduals(const ParticleArrays& particles, const StrainTetraConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out) {
+  tetra_strain_residuals(particles, batch, begin, end, out);
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+
+#include "sequential_loop.hpp"
 #include <tessera/core/position_based_dynamics.hpp>
 
 #include "constraint_validation.hpp"
@@ -76,6 +84,7 @@ HWY_AFTER_NAMESPACE();
 namespace tessera {
 
 HWY_EXPORT(ProjectStrainTetraConstraints);
+HWY_EXPORT(StrainTetraResiduals);
 
 StrainTetraConstraints make_strain_tetra_constraints(const StrainTetraConstraintInput& input) {
   const detail::ConstraintValidator validator(StrainTetraConstraints::kFamily,
@@ -117,6 +126,31 @@ void project_strain_tetra_constraints(ParticleArrays particles,
   check_projection_range(StrainTetraConstraints::kFamily, begin, end, constraints.size(),
                          constraints.particles.particle_count, particles);
   HWY_DYNAMIC_DISPATCH(ProjectStrainTetraConstraints)(particles, constraints, begin, end);
+}
+
+void constraint_residuals(const ParticleArrays& particles, const StrainTetraConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(StrainTetraResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, const StrainTetraConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& /*settings: PBD form only*/) {
+  check_projection_range(StrainTetraConstraints::kFamily, begin, end, batch.size(),
+                         batch.particles.particle_count, particles);
+  detail::project_in_order<4>(
+      particles, batch.particles, begin, end,
+      [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+        const Vector3r stretch(batch.stretch_stiffness[0][c], batch.stretch_stiffness[1][c],
+                               batch.stretch_stiffness[2][c]);
+        const Vector3r shear(batch.shear_stiffness[0][c], batch.shear_stiffness[1][c],
+                             batch.shear_stiffness[2][c]);
+        PositionBasedDynamics::solve_StrainTetraConstraint(
+            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
+            s.inverse_mass[2], s.position[3], s.inverse_mass[3],
+            detail::rest_inverse_of<3>(batch.rest_inverse, c), stretch, shear, batch.normalize_stretch,
+            batch.normalize_shear, corr[0], corr[1], corr[2], corr[3]);
+      });
 }
 
 }  // namespace tessera

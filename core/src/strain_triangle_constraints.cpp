@@ -11,6 +11,7 @@
 
 #include "kernels/batch-inl.h"
 #include "kernels/strain-inl.h"
+#include "kernels/strain_residual-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
@@ -62,11 +63,19 @@ void ProjectStrainTriangleConstraints(ParticleArrays particles,
   }
 }
 
+void StrainTriangleResiduals(const ParticleArrays& particles,
+                             const StrainTriangleConstraints& batch, std::size_t begin,
+                             std::size_t end, Real* out) {
+  triangle_strain_residuals(particles, batch, begin, end, out);
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+
+#include "sequential_loop.hpp"
 #include <tessera/core/position_based_dynamics.hpp>
 
 #include "constraint_validation.hpp"
@@ -74,6 +83,7 @@ HWY_AFTER_NAMESPACE();
 namespace tessera {
 
 HWY_EXPORT(ProjectStrainTriangleConstraints);
+HWY_EXPORT(StrainTriangleResiduals);
 
 StrainTriangleConstraints make_strain_triangle_constraints(
     const StrainTriangleConstraintInput& input) {
@@ -109,6 +119,29 @@ void project_strain_triangle_constraints(ParticleArrays particles,
   check_projection_range(StrainTriangleConstraints::kFamily, begin, end, constraints.size(),
                          constraints.particles.particle_count, particles);
   HWY_DYNAMIC_DISPATCH(ProjectStrainTriangleConstraints)(particles, constraints, begin, end);
+}
+
+void constraint_residuals(const ParticleArrays& particles,
+                          const StrainTriangleConstraints& batch, std::size_t begin,
+                          std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(StrainTriangleResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, const StrainTriangleConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& /*settings: PBD form only*/) {
+  check_projection_range(StrainTriangleConstraints::kFamily, begin, end, batch.size(),
+                         batch.particles.particle_count, particles);
+  detail::project_in_order<3>(particles, batch.particles, begin, end,
+                      [&](std::size_t c, const detail::ConstraintStencil<3>& s, Vector3r(&corr)[3]) {
+                        PositionBasedDynamics::solve_StrainTriangleConstraint(
+                            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1],
+                            s.position[2], s.inverse_mass[2],
+                            detail::rest_inverse_of<2>(batch.rest_inverse, c), batch.xx_stiffness[c],
+                            batch.yy_stiffness[c], batch.xy_stiffness[c],
+                            batch.normalize_stretch, batch.normalize_shear, corr[0], corr[1],
+                            corr[2]);
+                      });
 }
 
 }  // namespace tessera

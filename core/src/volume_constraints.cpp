@@ -11,6 +11,7 @@
 
 #include "kernels/batch_loop-inl.h"
 #include "kernels/volume-inl.h"
+#include "kernels/residual_lanes-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
@@ -28,11 +29,26 @@ void ProjectVolumeConstraints(ParticleArrays particles, VolumeConstraints& const
       });
 }
 
+void VolumeResiduals(const ParticleArrays& particles, const VolumeConstraints& batch,
+                     std::size_t begin, std::size_t end, Real* out) {
+  residual_lanes<4>(particles, batch.particles, begin, end, out,
+                    [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
+                      const RealLanes rest_volume = load(batch.rest_volume.data(), i);
+                      return relative(
+                          volume_constraint(p[0], p[1], p[2], p[3], rest_volume).C,
+                          rest_volume);
+                    });
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include <tessera/core/position_based_dynamics.hpp>
+#include <tessera/core/xpbd.hpp>
+
+#include "sequential_loop.hpp"
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -42,6 +58,7 @@ HWY_AFTER_NAMESPACE();
 namespace tessera {
 
 HWY_EXPORT(ProjectVolumeConstraints);
+HWY_EXPORT(VolumeResiduals);
 
 VolumeConstraints make_volume_constraints(const VolumeConstraintInput& input) {
   namespace lanes = HWY_NAMESPACE;
@@ -85,6 +102,38 @@ void project_volume_constraints(ParticleArrays particles, VolumeConstraints& con
   check_projection_range(VolumeConstraints::kFamily, begin, end, constraints.size(),
                          constraints.particles.particle_count, particles);
   HWY_DYNAMIC_DISPATCH(ProjectVolumeConstraints)(particles, constraints, begin, end, settings);
+}
+
+void constraint_residuals(const ParticleArrays& particles, const VolumeConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out) {
+  HWY_DYNAMIC_DISPATCH(VolumeResiduals)(particles, batch, begin, end, out);
+}
+
+void project_sequentially(ParticleArrays particles, VolumeConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& settings) {
+  check_projection_range(VolumeConstraints::kFamily, begin, end, batch.size(),
+                         batch.particles.particle_count, particles);
+  if (detail::uses_compliance(settings)) {
+    detail::project_in_order<4>(
+        particles, batch.particles, begin, end,
+        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+          XPBD::solve_VolumeConstraint(
+              s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
+              s.inverse_mass[2], s.position[3], s.inverse_mass[3], batch.rest_volume[c],
+              batch.compliance[c], settings.dt, batch.lambda[c], corr[0], corr[1], corr[2],
+              corr[3]);
+        });
+  } else {
+    detail::project_in_order<4>(
+        particles, batch.particles, begin, end,
+        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
+          PositionBasedDynamics::solve_VolumeConstraint(s.position[0], s.inverse_mass[0], s.position[1],
+                                      s.inverse_mass[1], s.position[2], s.inverse_mass[2],
+                                      s.position[3], s.inverse_mass[3], batch.rest_volume[c],
+                                      batch.stiffness[c], corr[0], corr[1], corr[2], corr[3]);
+        });
+  }
 }
 
 }  // namespace tessera

@@ -8,7 +8,6 @@
 
 #include <tessera/core/constraint_residual.hpp>
 
-#include "constraint_family.hpp"
 #include "residual_sum.hpp"
 
 namespace tessera {

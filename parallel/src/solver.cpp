@@ -19,8 +19,7 @@
 #include <tessera/core/error.hpp>
 #include <tessera/core/sequential_projection.hpp>
 
-#include "constraint_family.hpp"
-#include "jacobi_set_builder.hpp"
+#include "jacobi_set.hpp"
 #include "residual_sum.hpp"
 
 namespace tessera {
@@ -75,26 +74,50 @@ ParticleState scheduled_particles(const ParticleState& user, const Schedule& sch
   return state;
 }
 
-/// The batched kernel of each family behind one signature: the solver's dispatch table.
+/// Each family's entry points behind one signature per kind: the solver's dispatch tables,
+/// generated from the family list (constraint_families.hpp), indexed by ConstraintFamily.
 using ProjectBlock = void (*)(ParticleArrays, ConstraintSets&, std::size_t, std::size_t,
                               const ProjectionSettings&);
+using VelocityBlock = void (*)(ParticleArrays, const ConstraintSets&, std::size_t, std::size_t,
+                               Real);
 
 template <ConstraintFamily Family>
-void project_family(ParticleArrays particles, ConstraintSets& sets, std::size_t begin,
-                    std::size_t end, const ProjectionSettings& settings) {
-  sets.for_each([&](ConstraintFamily family, auto& batch) {
-    if constexpr (requires { batch.size(); })
-      if (family == Family) detail::project_batch(particles, batch, begin, end, settings);
-  });
+void project_block(ParticleArrays particles, ConstraintSets& sets, std::size_t begin,
+                   std::size_t end, const ProjectionSettings& settings) {
+  using Batch = FamilyBatchOf<Family>;
+  project_constraints(particles, sets.get<Family>(), begin, end, settings_for<Batch>(settings));
 }
 
-template <std::size_t... F>
-constexpr std::array<ProjectBlock, kConstraintFamilyCount> make_dispatch_table(
-    std::index_sequence<F...>) {
-  return {&project_family<ConstraintFamily(F)>...};
+template <ConstraintFamily Family>
+void project_block_sequentially(ParticleArrays particles, ConstraintSets& sets,
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
+  using Batch = FamilyBatchOf<Family>;
+  project_sequentially(particles, sets.get<Family>(), begin, end, settings_for<Batch>(settings));
 }
-constexpr auto kProjectBlock =
-    make_dispatch_table(std::make_index_sequence<kConstraintFamilyCount>());
+
+/// The velocity solve of a family that has one; nothing for the others.
+template <ConstraintFamily Family>
+void velocity_block(ParticleArrays velocities, const ConstraintSets& sets, std::size_t begin,
+                    std::size_t end, Real dt) {
+  if constexpr (FamilyBatchOf<Family>::kTraits.velocity_pass)
+    solve_velocity_constraints(velocities, sets.get<Family>(), begin, end, dt);
+}
+
+template <class Entry, template <ConstraintFamily> class Make, std::size_t... F>
+constexpr std::array<Entry, kConstraintFamilyCount> table(std::index_sequence<F...>) {
+  return {Make<ConstraintFamily(F)>::value...};
+}
+template <ConstraintFamily F>
+struct ProjectEntry { static constexpr ProjectBlock value = &project_block<F>; };
+template <ConstraintFamily F>
+struct SequentialEntry { static constexpr ProjectBlock value = &project_block_sequentially<F>; };
+template <ConstraintFamily F>
+struct VelocityEntry { static constexpr VelocityBlock value = &velocity_block<F>; };
+constexpr auto kFamilies = std::make_index_sequence<kConstraintFamilyCount>();
+constexpr auto kProjectBlock = table<ProjectBlock, ProjectEntry>(kFamilies);
+constexpr auto kProjectSequentially = table<ProjectBlock, SequentialEntry>(kFamilies);
+constexpr auto kVelocityBlock = table<VelocityBlock, VelocityEntry>(kFamilies);
 
 }  // namespace
 
@@ -110,6 +133,7 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
                        {settings_.mode, settings_.block_size, settings_.hybrid_threshold, threads});
   state_ = scheduled_particles(model.particles, schedule_);
   jacobi_work_.bind(schedule_.jacobi());
+  build_stages();
   statistics_.seconds_schedule = seconds_since(start);
 
   arena_ = std::make_unique<tbb::task_arena>(int(threads));
@@ -156,34 +180,102 @@ void Solver::parallel_chunks(std::size_t count, std::size_t chunk, Body&& body) 
   });
 }
 
-void Solver::run_blocks(std::span<const ScheduleBlock> blocks, ParticleArrays particles,
-                        ConstraintSets& sets, const ProjectionSettings& projection) {
-  parallel_chunks(blocks.size(), 1, [&](std::size_t first, std::size_t last) {
-    for (std::size_t b = first; b < last; ++b) {
-      const ScheduleBlock& block = blocks[b];
-      kProjectBlock[std::size_t(block.family)](particles, sets, block.begin, block.end,
-                                               projection);
-    }
-  });
-}
-
 void Solver::JacobiWork::bind(const JacobiSet& jacobi) {
   x.assign(jacobi.incidence_count, 0);
   y.assign(jacobi.incidence_count, 0);
   z.assign(jacobi.incidence_count, 0);
 }
 
-void Solver::jacobi_iteration(JacobiSet& jacobi, JacobiWork& work,
-                              const ProjectionSettings& projection) {
-  if (jacobi.constraint_count == 0) return;
+void Solver::build_stages() {
+  stages_.assign(schedule_.iteration_stages().begin(), schedule_.iteration_stages().end());
+  velocity_stages_.assign(schedule_.velocity_stages().begin(), schedule_.velocity_stages().end());
+  if (dynamic_.constraint_count == 0) return;
+  const Stage all{StageKind::sequential_sweep, StageSet::dynamic, 0,
+                  std::uint32_t(dynamic_.blocks.size())};
+  const bool velocity_pass =
+      std::any_of(dynamic_.blocks.begin(), dynamic_.blocks.end(), [](const ScheduleBlock& b) {
+        return family_traits(b.family).velocity_pass;
+      });
+  if (velocity_pass) velocity_stages_.push_back({StageKind::velocity_pass, all.set, 0, all.last_block});
+  if (settings_.mode == SolverMode::sequential) {
+    stages_.push_back(all);
+    return;
+  }
+  stages_.push_back({StageKind::jacobi_projection, all.set, 0, all.last_block});
+  stages_.push_back({StageKind::jacobi_reduction, all.set, 0, all.last_block});
+}
+
+ConstraintSets& Solver::batches_of(StageSet set) {
+  switch (set) {
+    case StageSet::coloured: return schedule_.coloured();
+    case StageSet::jacobi: return schedule_.jacobi().constraints;
+    case StageSet::dynamic: break;
+  }
+  return dynamic_.constraints;
+}
+
+std::span<const ScheduleBlock> Solver::blocks_of(const Stage& stage) const {
+  const std::vector<ScheduleBlock>* blocks = &dynamic_.blocks;
+  if (stage.set == StageSet::jacobi) blocks = &schedule_.jacobi().blocks;
+  const ScheduleBlock* base =
+      stage.set == StageSet::coloured ? schedule_.blocks().data() : blocks->data();
+  return {base + stage.first_block, base + stage.last_block};
+}
+
+void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection) {
+  ConstraintSets& sets = batches_of(stage.set);
+  const auto blocks = blocks_of(stage);
+  JacobiSet& jacobi = stage.set == StageSet::jacobi ? schedule_.jacobi() : dynamic_;
+  JacobiWork& work = stage.set == StageSet::jacobi ? jacobi_work_ : dynamic_work_;
+  switch (stage.kind) {
+    case StageKind::coloured_phase: {
+      const ParticleArrays particles = ParticleArrays::of(state_);
+      parallel_chunks(blocks.size(), 1, [&](std::size_t first, std::size_t last) {
+        for (std::size_t b = first; b < last; ++b)
+          kProjectBlock[std::size_t(blocks[b].family)](particles, sets, blocks[b].begin,
+                                                       blocks[b].end, projection);
+      });
+      return;
+    }
+    case StageKind::jacobi_projection: return jacobi_projection(jacobi, work, blocks, projection);
+    case StageKind::jacobi_reduction: return jacobi_reduction(jacobi, work);
+    case StageKind::sequential_sweep: {
+      const ParticleArrays particles = ParticleArrays::of(state_);
+      for (const ScheduleBlock& block : blocks)
+        kProjectSequentially[std::size_t(block.family)](particles, sets, block.begin, block.end,
+                                                        projection);
+      return;
+    }
+    case StageKind::velocity_pass: {
+      const ParticleArrays velocities = velocity_arrays_of(state_);
+      const auto solve = [&](const ScheduleBlock& block) {
+        kVelocityBlock[std::size_t(block.family)](velocities, sets, block.begin, block.end,
+                                                  projection.dt);
+      };
+      if (stage.set == StageSet::coloured && settings_.mode != SolverMode::sequential) {
+        parallel_chunks(blocks.size(), 1, [&](std::size_t first, std::size_t last) {
+          for (std::size_t b = first; b < last; ++b) solve(blocks[b]);
+        });
+      } else {
+        // A Jacobi set's (or the input order's) constraints may share particles: in order.
+        for (const ScheduleBlock& block : blocks) solve(block);
+      }
+      return;
+    }
+  }
+}
+
+void Solver::jacobi_projection(JacobiSet& jacobi, JacobiWork& work,
+                               std::span<const ScheduleBlock> blocks,
+                               const ProjectionSettings& projection) {
   std::array<Real*, kConstraintFamilyCount> lambdas{};
   jacobi.constraints.for_each([&](ConstraintFamily family, auto& batch) {
-    lambdas[std::size_t(family)] = detail::lambda_of(batch);
+    if (family_traits(family).xpbd) lambdas[std::size_t(family)] = lambda_of(batch);
   });
   const Real omega = settings_.jacobi_relaxation;
-  parallel_chunks(jacobi.blocks.size(), 1, [&](std::size_t first, std::size_t last) {
+  parallel_chunks(blocks.size(), 1, [&](std::size_t first, std::size_t last) {
     for (std::size_t b = first; b < last; ++b) {
-      const ScheduleBlock& block = jacobi.blocks[b];
+      const ScheduleBlock& block = blocks[b];
       const std::size_t f = std::size_t(block.family);
       // Gather from the particles, store into this family's incidences.
       ParticleArrays particles = ParticleArrays::of(state_);
@@ -210,6 +302,10 @@ void Solver::jacobi_iteration(JacobiSet& jacobi, JacobiWork& work,
       }
     }
   });
+}
+
+void Solver::jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work) {
+  const Real omega = settings_.jacobi_relaxation;
   parallel_chunks(jacobi.particles.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
     for (std::size_t k = first; k < last; ++k) {
       const ParticleIndex p = jacobi.particles[k];
@@ -231,21 +327,7 @@ void Solver::jacobi_iteration(JacobiSet& jacobi, JacobiWork& work,
 }
 
 void Solver::iterate(const ProjectionSettings& projection) {
-  ParticleArrays particles = ParticleArrays::of(state_);
-  if (settings_.mode == SolverMode::sequential) {
-    const auto in_order = [&](ConstraintFamily, auto& batch) {
-      if (batch.size() != 0)
-        project_sequentially(particles, batch, 0, batch.size(),
-                             detail::settings_for(batch, projection));
-    };
-    schedule_.coloured().for_each(in_order);
-    dynamic_sequential_.for_each(in_order);
-    return;
-  }
-  for (std::size_t phase = 0; phase < schedule_.phase_count(); ++phase)
-    run_blocks(schedule_.phase_blocks(phase), particles, schedule_.coloured(), projection);
-  jacobi_iteration(schedule_.jacobi(), jacobi_work_, projection);
-  jacobi_iteration(dynamic_, dynamic_work_, projection);
+  for (const Stage& stage : stages_) run_stage(stage, projection);
 }
 
 void Solver::save_state() {
@@ -299,13 +381,12 @@ void Solver::project(std::size_t iterations, Real dt) {
 
 void Solver::reset_lambdas() {
   const auto reset = [](ConstraintFamily, auto& batch) {
-    if (Real* lambda = detail::lambda_of(batch))
+    if (Real* lambda = lambda_of(batch))
       std::fill(lambda, lambda + padded_size(batch.size()), Real(0));
   };
   schedule_.coloured().for_each(reset);
   schedule_.jacobi().constraints.for_each(reset);
   dynamic_.constraints.for_each(reset);
-  dynamic_sequential_.for_each(reset);
 }
 
 void Solver::integrate(Real h) {
@@ -367,6 +448,7 @@ void Solver::step() {
     statistics_.projections +=
         std::uint64_t(settings_.iterations) * (statistics_.constraints + dynamic_count_);
     update_velocities(h);
+    for (const Stage& stage : velocity_stages_) run_stage(stage, projection);
     if (last && settings_.report_residuals) report_.residual_after = residual();
   }
   restore_if_not_finite(("step " + std::to_string(statistics_.steps + 1)).c_str());
@@ -375,20 +457,17 @@ void Solver::step() {
 }
 
 Residual Solver::residual() {
-  const auto ranges = detail::residual_ranges(
-      schedule_,
-      settings_.mode == SolverMode::sequential ? dynamic_sequential_ : dynamic_.constraints,
-      kResidualChunk);
+  const auto ranges = detail::residual_ranges(schedule_, dynamic_.constraints, kResidualChunk);
   std::vector<detail::ResidualPartial> partials(ranges.size());
   const ParticleArrays particles = ParticleArrays::of(state_);
   parallel_chunks(ranges.size(), 1, [&](std::size_t first, std::size_t last) {
     for (std::size_t k = first; k < last; ++k) {
       const auto& range = ranges[k];
-      const ConstraintSets& sets =
-          range.set == detail::ResidualRange::coloured ? schedule_.coloured()
-          : range.set == detail::ResidualRange::jacobi ? schedule_.jacobi().constraints
-          : settings_.mode == SolverMode::sequential   ? dynamic_sequential_
-                                                       : dynamic_.constraints;
+      const ConstraintSets& sets = range.set == detail::ResidualRange::coloured
+                                       ? schedule_.coloured()
+                                   : range.set == detail::ResidualRange::jacobi
+                                       ? schedule_.jacobi().constraints
+                                       : dynamic_.constraints;
       partials[k] = detail::residual_of_range(range, sets, particles);
     }
   });
@@ -452,7 +531,7 @@ Real Solver::lambda(ConstraintIndex constraint) const {
   Real result = 0;
   const auto read = [&](ConstraintFamily family, auto& batch) {
     if (family != where.family) return;
-    if (const Real* lambda = detail::lambda_of(batch)) result = lambda[where.slot];
+    if (const Real* lambda = lambda_of(batch)) result = lambda[where.slot];
   };
   auto& sets = const_cast<Schedule&>(schedule_);
   if (where.in_jacobi_set)
@@ -464,11 +543,7 @@ Real Solver::lambda(ConstraintIndex constraint) const {
 
 void Solver::set_dynamic_constraints(ConstraintSets constraints) {
   constraints.for_each([&](ConstraintFamily family, const auto& batch) {
-    std::size_t built_for = 0;
-    if constexpr (requires { batch.particles; })
-      built_for = batch.particles.particle_count;
-    else
-      built_for = batch.particle_count;
+    const std::size_t built_for = built_for_particles(batch);
     if (batch.size() != 0 && built_for > state_.size())
       throw InvalidInput("dynamic " + std::string(family_name(family)) +
                          " constraints were built for " + std::to_string(built_for) +
@@ -476,21 +551,28 @@ void Solver::set_dynamic_constraints(ConstraintSets constraints) {
   });
   dynamic_count_ = constraints.size();
   if (settings_.mode == SolverMode::sequential) {
-    dynamic_sequential_ = std::move(constraints);  // the user's numbering is the solver's
-    return;
+    // Swept as given, family by family (the user's numbering is the solver's).
+    dynamic_ = JacobiSet();
+    const auto sizes = constraints.sizes();
+    for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
+      if (sizes[f] != 0) dynamic_.blocks.push_back({ConstraintFamily(f), 0, std::uint32_t(sizes[f])});
+    dynamic_.constraints = std::move(constraints);
+    dynamic_.constraint_count = dynamic_count_;
+  } else {
+    std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> all;
+    const auto sizes = constraints.sizes();
+    for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+      all[f].resize(sizes[f]);
+      for (std::size_t i = 0; i < sizes[f]; ++i) all[f][i] = std::uint32_t(i);
+    }
+    dynamic_ = detail::build_jacobi_set(
+        constraints, all, state_.size(),
+        [&](ParticleIndex p) { return schedule_.scheduled_particle(p); },
+        [&](ParticleIndex scheduled) { return state_.inverse_mass[scheduled] > 0; },
+        schedule_.options());
   }
-  std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> all;
-  const auto sizes = constraints.sizes();
-  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
-    all[f].resize(sizes[f]);
-    for (std::size_t i = 0; i < sizes[f]; ++i) all[f][i] = std::uint32_t(i);
-  }
-  dynamic_ = detail::build_jacobi_set(
-      constraints, all, state_.size(),
-      [&](ParticleIndex p) { return schedule_.scheduled_particle(p); },
-      [&](ParticleIndex scheduled) { return state_.inverse_mass[scheduled] > 0; },
-      schedule_.options());
   dynamic_work_.bind(dynamic_);
+  build_stages();
 }
 
 }  // namespace tessera

@@ -23,7 +23,8 @@
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/core/error.hpp>
 #include <tessera/core/model.hpp>
-#include <tessera/parallel/model.hpp>
+#include <tessera/coloring/model_graph.hpp>
+#include <tessera/core/model.hpp>
 #include <tessera/parallel/solver.hpp>
 
 namespace {

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include <tessera/core/error.hpp>
@@ -28,6 +29,35 @@ struct ProjectionSettings {
   ConstraintSemantics semantics = ConstraintSemantics::stiffness;
   /// The (sub)step's time step, used by compliance semantics (α̃ = α / dt²).
   Real dt = Real(1) / Real(60);
+};
+
+/// How the tool draws a family's constraint as a cell of its frames (VTK): which slots make it.
+enum class CellShape : std::uint8_t {
+  none,         ///< not drawn
+  segment,      ///< a line through slots 0 and 1
+  hinge,        ///< a line through slots 2 and 3 (a bending stencil's shared edge)
+  triangle,     ///< slots 0, 1, 2
+  tetrahedron,  ///< slots 0, 1, 2, 3
+};
+
+/// What a constraint family is and can do, stated once in its batch type as
+/// `static constexpr FamilyTraits kTraits` next to its arrays (and `kFamily`, its name in
+/// messages). constraint_families.hpp checks
+/// it against the batch (a capability without its arrays, or arrays without the capability,
+/// is a compile error) and every generic piece (schedule, solver, residuals, output) reads it.
+struct FamilyTraits {
+  /// Particles per constraint (ConstraintParticles<arity>), or 0 for a family whose
+  /// constraints have any number of particles (a CSR layout: shape matching).
+  int arity;
+  /// Has an XPBD compliance form (arrays `compliance` and `lambda`) and is projected with the
+  /// semantics the caller asks for; otherwise its PBD form runs under either semantics.
+  bool xpbd;
+  /// Keeps a multiplier per constraint (array `lambda`) that the solver resets every substep.
+  bool multiplier;
+  /// Has a velocity solve after each substep's velocity update (solve_velocity_constraints).
+  bool velocity_pass;
+  /// How frames draw it.
+  CellShape cell;
 };
 
 /// The particle indices of N-particle constraints, one padded array per slot.

@@ -25,6 +25,9 @@ struct DihedralConstraintInput {
 
 struct DihedralConstraints {
   static constexpr const char* kFamily = "dihedral";
+  static constexpr FamilyTraits kTraits = {
+      .arity = 4, .xpbd = true, .multiplier = true, .velocity_pass = false,
+      .cell = CellShape::hinge};
   ConstraintParticles<4> particles;
   /// φ0 ∈ [0, π], the angle between the rest normals (0 for a flat rest stencil).
   AlignedVector<Real> rest_angle;
@@ -34,6 +37,15 @@ struct DihedralConstraints {
   AlignedVector<Real> lambda;
 
   std::size_t size() const { return particles.count; }
+  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
+  template <class Self>
+  static auto per_constraint_arrays(Self& b) {
+    return std::tie(b.rest_angle, b.stiffness, b.compliance, b.lambda);
+  }
+  template <class Self>
+  static auto batch_wide_fields([[maybe_unused]] Self& b) {
+    return std::tie();
+  }
 };
 
 /// Validates and builds the batch. Throws InvalidInput naming the constraint for: an index out
@@ -51,5 +63,27 @@ DihedralConstraints make_dihedral_constraints(const DihedralConstraintInput& inp
 void project_dihedral_constraints(ParticleArrays particles, DihedralConstraints& constraints,
                                   std::size_t begin, std::size_t end,
                                   const ProjectionSettings& settings);
+
+// ------------------------------------------------------------ the family's entry points
+// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
+
+/// The batched kernel (project_dihedral_constraints).
+inline void project_constraints(ParticleArrays particles, DihedralConstraints& batch,
+                                std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+  project_dihedral_constraints(particles, batch, begin, end, settings);
+}
+
+/// Sequential reference (sequential_projection.hpp). Dihedral: PositionBasedDynamics::solve_DihedralConstraint with (rest_angle, stiffness), or
+/// XPBD::solve_DihedralConstraint with (rest_angle, compliance, settings.dt, lambda).
+void project_sequentially(ParticleArrays particles, DihedralConstraints& batch,
+                          std::size_t begin, std::size_t end,
+                          const ProjectionSettings& settings);
+
+/// Residual (constraint_residual.hpp). Dihedral: |φ − φ0| in radians, φ ∈ [0, π] the angle between the wing normals exactly as
+/// the dihedral formula computes it. A degenerate stencil (zero-length shared edge or a
+/// zero-area wing) has no defined angle; it reads the formula's value there, φ = 0 for a
+/// stencil collapsed to one point (so the residual is φ0), always finite and ≤ π.
+void constraint_residuals(const ParticleArrays& particles, const DihedralConstraints& batch,
+                          std::size_t begin, std::size_t end, Real* out);
 
 }  // namespace tessera

@@ -12,7 +12,7 @@
 #include <string>
 
 #include <tessera/core/real.hpp>
-#include <tessera/parallel/model.hpp>
+#include <tessera/core/constraint_families.hpp>
 
 namespace tessera {
 

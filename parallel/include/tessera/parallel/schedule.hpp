@@ -17,8 +17,10 @@
 //                order (CSR), so the sum is the same for any thread count (no atomics).
 //
 // Particles are renumbered as the colouring asks (its locality order), constraints follow
-// the colouring's order inside each colour; locate() and the particle maps lead back to the
-// user's numbering.
+// the colouring's order inside each colour; the remap tables (one old→new table per family),
+// locate() and the particle maps lead back to the user's numbering.
+//
+// The schedule also builds the mode's stage list (stage.hpp): what one iteration runs.
 #pragma once
 
 #include <array>
@@ -29,30 +31,13 @@
 #include <vector>
 
 #include <tessera/coloring/colouring.hpp>
+#include <tessera/coloring/model_graph.hpp>
 #include <tessera/core/aligned_vector.hpp>
-#include <tessera/parallel/model.hpp>
+#include <tessera/core/model.hpp>
+#include <tessera/parallel/solver_mode.hpp>
+#include <tessera/parallel/stage.hpp>
 
 namespace tessera {
-
-/// How the solver projects the constraints each iteration.
-enum class SolverMode : std::uint8_t {
-  /// Coloured Gauss–Seidel: colour after colour, each colour in parallel.
-  gs,
-  /// Jacobi with constraint averaging: every constraint from the same positions, then
-  /// x += ω · (sum of corrections) / (count) per particle.
-  jacobi,
-  /// gs for the colours with at least hybrid_threshold constraints, one Jacobi phase for the
-  /// smaller ones after them.
-  hybrid,
-  /// The classic PBD loop and reference: one thread, constraints in input order (family by
-  /// family), the scalar API per constraint; no colouring.
-  sequential,
-};
-
-/// "gs", "jacobi", "hybrid", "sequential".
-std::string_view solver_mode_name(SolverMode mode);
-/// The mode of that name; throws InvalidInput listing the names for any other.
-SolverMode parse_solver_mode(std::string_view name);
 
 /// Constraints per parallel work item when nothing else is said (see solver.hpp for the
 /// measurement behind it).
@@ -75,6 +60,12 @@ struct ScheduleBlock {
   ConstraintFamily family;
   std::uint32_t begin;
   std::uint32_t end;
+};
+
+/// Where one constraint of a family went: the entry of the family's old→new table.
+struct ConstraintSlot {
+  bool in_jacobi_set;
+  std::uint32_t slot;
 };
 
 /// Where a user's constraint went: a slot of the coloured batches or of the Jacobi set.
@@ -121,6 +112,14 @@ class Schedule {
   SolverMode mode() const { return options_.mode; }
   const ScheduleOptions& options() const { return options_; }
 
+  /// What one iteration runs, and what runs after each velocity update (stage.hpp), for the
+  /// schedule's own constraints (the solver adds its dynamic ones).
+  std::span<const Stage> iteration_stages() const { return iteration_stages_; }
+  std::span<const Stage> velocity_stages() const { return velocity_stages_; }
+  /// The blocks the coloured stages name: every phase's, then (mode sequential) one per
+  /// family range.
+  std::span<const ScheduleBlock> blocks() const { return blocks_; }
+
   /// The coloured batches (mode sequential: the model's batches, unchanged).
   ConstraintSets& coloured() { return coloured_; }
   const ConstraintSets& coloured() const { return coloured_; }
@@ -150,11 +149,23 @@ class Schedule {
     return new_to_old_.empty() ? scheduled : new_to_old_[scheduled];
   }
 
-  std::size_t constraint_count() const { return location_.size(); }
+  std::size_t constraint_count() const { return family_first_.back(); }
+  /// Family f's old→new table: where each of its constraints (the model's index within the
+  /// family) was placed.
+  std::span<const ConstraintSlot> remap(ConstraintFamily family) const {
+    return remap_[std::size_t(family)];
+  }
   /// Where the user's constraint (global id, see Model) was placed.
   ConstraintLocation locate(ConstraintIndex user_constraint) const;
 
  private:
+  /// Per family, the model's constraint that each scheduled slot holds (or a padding mark).
+  using SourceLists = std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>;
+  void lay_out_in_input_order(const Model& model);
+  void take_particle_order(const Colouring& colouring, std::size_t particle_count);
+  void place_by_colour(const Colouring& colouring, SourceLists& coloured, SourceLists& jacobi);
+  void build_stages();
+
   ScheduleOptions options_;
   ConstraintSets coloured_;
   std::vector<ScheduleBlock> blocks_;
@@ -163,9 +174,10 @@ class Schedule {
   std::array<std::vector<ScheduleBlock>, kConstraintFamilyCount> ranges_;
   JacobiSet jacobi_;
   std::vector<ParticleIndex> new_to_old_, old_to_new_;
-  /// Per global constraint id: the slot, with kJacobiBit set for the Jacobi set.
-  std::vector<std::uint32_t> location_;
+  std::array<std::vector<ConstraintSlot>, kConstraintFamilyCount> remap_;
+  /// The global id of each family's first constraint (and the total, last).
   std::array<ConstraintIndex, kConstraintFamilyCount + 1> family_first_{};
+  std::vector<Stage> iteration_stages_, velocity_stages_;
 };
 
 }  // namespace tessera

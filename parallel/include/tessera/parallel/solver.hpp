@@ -3,12 +3,13 @@
 //   per substep (h = time_step / substeps):
 //     v += h·g, x_prev = x, x += h·v          (movable particles; parallel over particles)
 //     λ = 0
-//     iterations × project                     (mode: see SolverMode in schedule.hpp)
+//     iterations × the mode's stages           (stage.hpp; modes in solver_mode.hpp)
 //       gs:     for each colour phase: parallel_for over its blocks → batched SIMD kernel
-//       jacobi: copy in → all blocks at once → per-particle averaged sum
+//       jacobi: all blocks at once into incidences → per-particle averaged sum
 //       hybrid: the gs phases, then one Jacobi phase for the small colours
 //       sequential: every constraint in input order through the scalar API, one thread
 //     v = (x − x_prev)/h · max(0, 1 − damping·h)
+//     velocity passes (families with a velocity solve, e.g. particle–tet contact friction)
 //
 // Threads: every parallel loop runs in the solver's own tbb::task_arena of `threads`
 // workers; no global TBB state is touched. Any thread count gives bitwise the same positions:
@@ -34,9 +35,12 @@
 #include <tessera/core/constraint_batch.hpp>
 #include <tessera/core/particle_state.hpp>
 #include <tessera/core/real.hpp>
-#include <tessera/parallel/model.hpp>
+#include <tessera/coloring/model_graph.hpp>
+#include <tessera/core/model.hpp>
 #include <tessera/parallel/residual.hpp>
 #include <tessera/parallel/schedule.hpp>
+#include <tessera/parallel/solver_mode.hpp>
+#include <tessera/parallel/stage.hpp>
 
 namespace tessera {
 
@@ -148,12 +152,14 @@ class Solver {
   Real lambda(ConstraintIndex constraint) const;
 
   /// Replaces the dynamic constraints — the ones made anew between steps, like collision
-  /// and contact constraints (the proximity families) — by `constraints`, which name
-  /// particles in the user's numbering; an empty ConstraintSets removes them. They are not
-  /// coloured: they form a Jacobi set of their own, projected after the model's constraints in
-  /// every iteration (mode sequential: one after another through the scalar API), reset with
-  /// the model's λ each step, and counted in residuals. Throws InvalidInput when a batch was
-  /// built for more particles than the model has.
+  /// and contact constraints (the proximity families, particle–tet contacts) — by
+  /// `constraints`, which name particles in the user's numbering; an empty ConstraintSets
+  /// removes them. They are not coloured: they form a Jacobi set of their own, projected
+  /// after the model's constraints in every iteration (mode sequential: one after another
+  /// through the scalar API), reset with the model's λ every substep, counted in residuals;
+  /// a family with a velocity solve (contact friction) runs it after every velocity update,
+  /// one constraint after another. Throws InvalidInput when a batch was built for more
+  /// particles than the model has.
   void set_dynamic_constraints(ConstraintSets constraints);
   std::size_t dynamic_constraint_count() const { return dynamic_count_; }
 
@@ -167,27 +173,34 @@ class Solver {
   void restore_if_not_finite(const char* operation);
   void integrate(Real h);
   void update_velocities(Real h);
-  void iterate(const ProjectionSettings& projection);
-  void run_blocks(std::span<const ScheduleBlock> blocks, ParticleArrays particles,
-                  ConstraintSets& sets, const ProjectionSettings& projection);
   /// The corrected positions of a Jacobi set's incidences.
   struct JacobiWork {
     AlignedVector<Real> x, y, z;
     void bind(const JacobiSet& jacobi);
   };
-  void jacobi_iteration(JacobiSet& jacobi, JacobiWork& work, const ProjectionSettings& projection);
+  /// The stage lists: the schedule's, then the dynamic constraints' (stage.hpp).
+  void build_stages();
+  /// The one dispatcher: runs any stage.
+  void run_stage(const Stage& stage, const ProjectionSettings& projection);
+  ConstraintSets& batches_of(StageSet set);
+  std::span<const ScheduleBlock> blocks_of(const Stage& stage) const;
+  void iterate(const ProjectionSettings& projection);
+  void jacobi_projection(JacobiSet& jacobi, JacobiWork& work,
+                         std::span<const ScheduleBlock> blocks,
+                         const ProjectionSettings& projection);
+  void jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work);
   template <class Body>
   void parallel_chunks(std::size_t count, std::size_t chunk, Body&& body);
 
   SolverSettings settings_;
   Schedule schedule_;
   ParticleState state_;
-  /// The schedule's Jacobi set, and the dynamic constraints' (mode sequential keeps the
-  /// dynamic constraints as given instead).
+  /// The schedule's Jacobi set's work, and the dynamic constraints' set (mode sequential:
+  /// the constraints as given and one block per family, swept in order) and work.
   JacobiWork jacobi_work_;
   JacobiSet dynamic_;
   JacobiWork dynamic_work_;
-  ConstraintSets dynamic_sequential_;
+  std::vector<Stage> stages_, velocity_stages_;
   std::size_t dynamic_count_ = 0;
   /// Positions and velocities from before the current step() or project() (check_finite),
   /// and the λ arrays are not restored (they are reset at the next step).

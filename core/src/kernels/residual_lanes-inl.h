@@ -1,0 +1,69 @@
+// The loop every batched residual of an N-particle family runs (constraint_residual.hpp):
+// gather the positions of W constraints (no inverse masses), evaluate the family's residual
+// on the lanes, store the active lanes. Each family's file supplies only its measure, built
+// from the same lane formula its projection kernel runs, so a residual is the violation the
+// kernel itself sees. Lanes past the end read padding (particle 0, zero rest data): their
+// branch-free formulas compute a discarded value and never trap; store_active never writes
+// past out[end − begin).
+#if defined(TESSERA_CORE_KERNELS_RESIDUAL_LANES_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef TESSERA_CORE_KERNELS_RESIDUAL_LANES_INL_H_
+#undef TESSERA_CORE_KERNELS_RESIDUAL_LANES_INL_H_
+#else
+#define TESSERA_CORE_KERNELS_RESIDUAL_LANES_INL_H_
+#endif
+
+#include <cstddef>
+
+#include <tessera/core/constraint_batch.hpp>
+
+#include "batch-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace tessera {
+namespace HWY_NAMESPACE {
+
+/// The positions of the N slots of constraints i .. i+W (inverse masses are not needed).
+template <int N>
+HWY_INLINE void gather_positions(const ParticleArrays& particles,
+                                 const ParticleIndex* const* slot, std::size_t i,
+                                 Vec3<RealLanes> (&p)[N]) {
+  const RealTag d;
+  for (int k = 0; k < N; ++k) {
+    const IndexLanes index = load_particle_indices(slot[k] + i);
+    p[k] = {hn::GatherIndex(d, particles.x, index), hn::GatherIndex(d, particles.y, index),
+            hn::GatherIndex(d, particles.z, index)};
+  }
+}
+
+/// out[c − begin] = residual(positions, c) for c in [begin, end), W at a time; residual
+/// returns the lanes of constraints i .. i+W from their gathered positions.
+template <int N, class Residual>
+HWY_INLINE void residual_lanes(const ParticleArrays& particles,
+                               const ConstraintParticles<N>& indices, std::size_t begin,
+                               std::size_t end, Real* out, Residual&& residual) {
+  const RealTag d;
+  const std::size_t lanes = hn::Lanes(d);
+  const ParticleIndex* slot[N];
+  constraint_slots(indices, slot);
+  for (std::size_t i = begin; i < end; i += lanes) {
+    Vec3<RealLanes> p[N];
+    gather_positions<N>(particles, slot, i, p);
+    store_active(residual(p, i), end - i, out + (i - begin));
+  }
+}
+
+HWY_INLINE RealLanes load(const Real* values, std::size_t i) {
+  return hn::LoadU(RealTag(), values + i);
+}
+
+/// |C| / |reference|, or |C| where the reference is zero (constraint_residual.cpp's relative).
+HWY_INLINE RealLanes relative(RealLanes C, RealLanes reference) {
+  const RealLanes scale = lane_abs(reference);
+  return lane_abs(C) / select(scale > zero<RealLanes>(), scale, splat<RealLanes>(1.0));
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace tessera
+HWY_AFTER_NAMESPACE();
+
+#endif  // TESSERA_CORE_KERNELS_RESIDUAL_LANES_INL_H_

@@ -1,0 +1,53 @@
+// The solver's stages: what one iteration (and one velocity update) runs, as a plain list
+// built once per mode by the schedule and extended by the solver with its dynamic
+// constraints; one dispatcher (Solver::run_stage) runs any stage.
+//
+//   gs          coloured phase 0 │ coloured phase 1 │ ... │ (dynamic: Jacobi projection │ reduction)
+//   jacobi      Jacobi projection │ Jacobi reduction │ (dynamic ...)
+//   hybrid      coloured phases of the large colours │ Jacobi projection │ reduction │ (dynamic ...)
+//   sequential  sequential sweep (every family range in input order) │ (dynamic: sequential sweep)
+//   after the velocity update: a velocity pass per phase (or set) holding a family with a
+//   velocity solve (kTraits.velocity_pass), none otherwise
+//
+// A stage names a set of batches and a range of that set's blocks (ScheduleBlock: family,
+// [begin, end) of its batch).
+#pragma once
+
+#include <cstdint>
+
+namespace tessera {
+
+enum class StageKind : std::uint8_t {
+  /// The blocks run in parallel through the batched kernels (one colour: no shared particle).
+  coloured_phase,
+  /// The blocks run in parallel, each constraint's corrected positions stored in its
+  /// incidences instead of the particles.
+  jacobi_projection,
+  /// Every particle of the set moves by ω times the mean of its incidences' corrections.
+  jacobi_reduction,
+  /// One thread, block after block, constraint after constraint, through the scalar API.
+  sequential_sweep,
+  /// The velocity solve of the blocks' families that have one (in parallel for a coloured
+  /// set, one block after another otherwise: a Jacobi set's constraints may share particles).
+  velocity_pass,
+};
+
+/// Which batches a stage works on.
+enum class StageSet : std::uint8_t {
+  /// The schedule's coloured batches (mode sequential: the model's batches in input order).
+  coloured,
+  /// The schedule's Jacobi set.
+  jacobi,
+  /// The solver's dynamic constraints (Solver::set_dynamic_constraints).
+  dynamic,
+};
+
+struct Stage {
+  StageKind kind;
+  StageSet set;
+  /// Blocks [first_block, last_block) of the set (unused by jacobi_reduction).
+  std::uint32_t first_block;
+  std::uint32_t last_block;
+};
+
+}  // namespace tessera

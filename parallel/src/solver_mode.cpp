@@ -1,0 +1,29 @@
+// Solver mode names (solver_mode.hpp).
+#include <tessera/parallel/solver_mode.hpp>
+
+#include <string>
+
+#include <tessera/core/error.hpp>
+
+namespace tessera {
+
+std::string_view solver_mode_name(SolverMode mode) {
+  switch (mode) {
+    case SolverMode::gs: return "gs";
+    case SolverMode::jacobi: return "jacobi";
+    case SolverMode::hybrid: return "hybrid";
+    case SolverMode::sequential: return "sequential";
+  }
+  return "unknown";
+}
+
+SolverMode parse_solver_mode(std::string_view name) {
+  std::string known;
+  for (const SolverMode mode : kSolverModes) {
+    if (solver_mode_name(mode) == name) return mode;
+    known += (known.empty() ? "" : ", ") + std::string(solver_mode_name(mode));
+  }
+  throw InvalidInput("unknown solver mode '" + std::string(name) + "' (known: " + known + ")");
+}
+
+}  // namespace tessera

@@ -54,28 +54,21 @@ void FrameOutput::add_constraint_cells(const Model& model, const Colouring* colo
     cells.family.push_back(std::int32_t(family));
     cells.constraint.push_back(std::int32_t(id));
   };
+  // Each family says how it is drawn (kTraits.cell, constraint_families.hpp).
   model.constraints.for_each([&](ConstraintFamily family, const auto& batch) {
-    if constexpr (requires { batch.particles.particle; }) {
-      constexpr int arity = decltype(batch.particles)::kParticlesPerConstraint;
+    using Batch = std::decay_t<decltype(batch)>;
+    constexpr CellShape shape = Batch::kTraits.cell;
+    if constexpr (shape != CellShape::none) {
       const auto& p = batch.particles.particle;
       for (std::size_t c = 0; c < batch.size(); ++c) {
-        switch (family) {
-          case ConstraintFamily::distance: add(lines, family, c, {p[0][c], p[1][c]}); break;
-          case ConstraintFamily::dihedral:
-          case ConstraintFamily::isometric_bending:
-            if constexpr (arity == 4) add(lines, family, c, {p[2][c], p[3][c]});
-            break;
-          case ConstraintFamily::strain_triangle:
-          case ConstraintFamily::fem_triangle:
-            if constexpr (arity == 3) add(triangles, family, c, {p[0][c], p[1][c], p[2][c]});
-            break;
-          case ConstraintFamily::volume:
-          case ConstraintFamily::strain_tetra:
-          case ConstraintFamily::fem_tetra:
-            if constexpr (arity == 4) add(tetrahedra, family, c, {p[0][c], p[1][c], p[2][c], p[3][c]});
-            break;
-          default: break;  // proximity families: no cell of their own
-        }
+        if constexpr (shape == CellShape::segment)
+          add(lines, family, c, {p[0][c], p[1][c]});
+        else if constexpr (shape == CellShape::hinge)
+          add(lines, family, c, {p[2][c], p[3][c]});
+        else if constexpr (shape == CellShape::triangle)
+          add(triangles, family, c, {p[0][c], p[1][c], p[2][c]});
+        else
+          add(tetrahedra, family, c, {p[0][c], p[1][c], p[2][c], p[3][c]});
       }
     }
   });

@@ -24,8 +24,9 @@
 #include <tessera/core/error.hpp>
 #include <tessera/core/model.hpp>
 #include <tessera/coloring/model_graph.hpp>
-#include <tessera/core/model.hpp>
 #include <tessera/parallel/solver.hpp>
+
+#pragma GCC diagnostic error "-Wswitch"
 
 namespace {
 
@@ -89,30 +90,32 @@ std::vector<ParticleIndex> indices(Bytes& in, std::size_t arity, std::size_t par
 void add_family(Bytes& in, const Decoded& d, ConstraintSets& sets) {
   const std::size_t n = d.particles;
   const std::span<const Vector3r> rest = d.positions;
-  switch (in.byte() % 12) {
-    case 0: {
+  // One case per family, and no default: a family added to the list without a case here
+  // fails the build (-Werror=switch below).
+  switch (ConstraintFamily(in.byte() % kConstraintFamilyCount)) {
+    case ConstraintFamily::distance: {
       const auto p = indices(in, 2, n);
       sets.distance = make_distance_constraints({p, rest, in.value(), in.value()});
       break;
     }
-    case 1: {
+    case ConstraintFamily::dihedral: {
       const auto p = indices(in, 4, n);
       sets.dihedral = make_dihedral_constraints({p, rest, in.value(), in.value()});
       break;
     }
-    case 2: {
+    case ConstraintFamily::isometric_bending: {
       const auto p = indices(in, 4, n);
       sets.isometric_bending = make_isometric_bending_constraints({p, rest, in.value(), in.value()});
       break;
     }
-    case 3: {
+    case ConstraintFamily::volume: {
       const auto p = indices(in, 4, n);
       sets.volume = make_volume_constraints({p, rest, in.value(), in.value()});
       break;
     }
-    case 4:
-    case 5:
-    case 6: {
+    case ConstraintFamily::edge_point_distance:
+    case ConstraintFamily::triangle_point_distance:
+    case ConstraintFamily::edge_edge_distance: {
       const int kind = in.byte() % 3;
       const auto p = indices(in, std::size_t(kind == 0 ? 3 : 4), n);
       std::vector<Real> distances;
@@ -124,13 +127,13 @@ void add_family(Bytes& in, const Decoded& d, ConstraintSets& sets) {
       if (kind == 2) sets.edge_edge_distance = make_edge_edge_distance_constraints(input);
       break;
     }
-    case 7: {
+    case ConstraintFamily::strain_triangle: {
       const auto p = indices(in, 3, n);
       sets.strain_triangle = make_strain_triangle_constraints(
           {p, rest, in.value(), in.value(), in.value(), in.byte() % 2 == 1, in.byte() % 2 == 1});
       break;
     }
-    case 8: {
+    case ConstraintFamily::strain_tetra: {
       const auto p = indices(in, 4, n);
       const Vector3r stretch(in.value(), in.value(), in.value());
       const Vector3r shear(in.value(), in.value(), in.value());
@@ -138,19 +141,19 @@ void add_family(Bytes& in, const Decoded& d, ConstraintSets& sets) {
           {p, rest, stretch, shear, in.byte() % 2 == 1, in.byte() % 2 == 1});
       break;
     }
-    case 9: {
+    case ConstraintFamily::fem_triangle: {
       const auto p = indices(in, 3, n);
       sets.fem_triangle = make_fem_triangle_constraints(
           {p, rest, in.value(), in.value(), in.value(), in.value(), in.value()});
       break;
     }
-    case 10: {
+    case ConstraintFamily::fem_tetra: {
       const auto p = indices(in, 4, n);
       sets.fem_tetra =
           make_fem_tetra_constraints({p, rest, in.value(), in.value(), in.byte() % 2 == 1});
       break;
     }
-    case 11: {
+    case ConstraintFamily::shape_matching: {
       // Offsets from the bytes, usually consistent, sometimes not.
       const std::size_t clusters = in.byte() % 4;
       std::vector<std::uint32_t> offsets{std::uint32_t(in.byte() % 8 == 0 ? 1 : 0)};
@@ -162,6 +165,21 @@ void add_family(Bytes& in, const Decoded& d, ConstraintSets& sets) {
       }
       sets.shape_matching = make_shape_matching_constraints(
           {offsets, p, rest, d.inverse_masses, in.value(), in.byte() % 2 == 1});
+      break;
+    }
+    case ConstraintFamily::particle_tet_contact: {
+      const auto p = indices(in, 5, n);
+      std::vector<Vector3r> barycentric, normals;
+      for (std::size_t c = 0; c < p.size() / 5 + in.byte() % 2; ++c) {
+        barycentric.emplace_back(in.value(), in.value(), in.value());
+        // Mostly unit normals, sometimes not.
+        const Vector3r normal(in.value(), in.value(), in.value());
+        normals.push_back(in.byte() < 224 && normal.norm() > Real(1e-3) ? normal.normalized()
+                                                                         : normal);
+      }
+      const ParticleState state(d.positions, d.inverse_masses);
+      sets.particle_tet_contact =
+          make_particle_tet_contacts({p, barycentric, normals, in.value()}, state);
       break;
     }
   }

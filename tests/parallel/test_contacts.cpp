@@ -1,0 +1,151 @@
+// Particle–tet contacts scheduled by the solver like any family: as model constraints
+// (coloured, or in input order) and as dynamic constraints (their Jacobi set), with the
+// friction velocity pass after every velocity update. Known answers on separate contacts: a
+// particle 0.2 inside a static tet ends on its face, the tet's vertices never move, friction
+// slows the sliding and Coulomb's limit stops it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include <tessera/parallel/solver.hpp>
+
+#include "scenes.hpp"
+
+namespace tessera {
+namespace {
+
+using test::make_solver;
+using test::same_bits;
+
+constexpr std::size_t kContacts = 20;
+constexpr Real kDepth = Real(0.2);
+
+/// kContacts unit tets, static, 2 m apart along y; particle c sits kDepth below the face
+/// z = 0 of tet c (inside it) sliding along x at 1 m/s. Contact c: the face's outward normal +z, the contact
+/// point below the particle on that face.
+struct ContactScene {
+  std::vector<Vector3r> positions;
+  std::vector<Real> inverse_masses;
+  std::vector<ParticleIndex> indices;
+  std::vector<Vector3r> barycentric, normals;
+
+  ContactScene() {
+    for (std::size_t c = 0; c < kContacts; ++c) {
+      const Real y = Real(2 * c);
+      const ParticleIndex first = ParticleIndex(positions.size());
+      for (const Vector3r corner : {Vector3r(0, 0, 0), Vector3r(1, 0, 0), Vector3r(0, 1, 0),
+                                    Vector3r(0, 0, -1)})
+        positions.push_back(corner + Vector3r(0, y, 0));
+      positions.emplace_back(Real(0.2), y + Real(0.2), -kDepth);
+      inverse_masses.insert(inverse_masses.end(), {0, 0, 0, 0, 1});
+      indices.insert(indices.end(), {first + 4, first, first + 1, first + 2, first + 3});
+      // The face point (0.2, 0.2, 0) = 0.2 x1 + 0.2 x2 + 0 x3 (+ 0.6 x0).
+      barycentric.emplace_back(Real(0.2), Real(0.2), Real(0));
+      normals.emplace_back(0, 0, 1);
+    }
+  }
+
+  ParticleState state() const {
+    ParticleState s(positions, inverse_masses);
+    for (std::size_t c = 0; c < kContacts; ++c) s.velocity_x[5 * c + 4] = 1;
+    return s;
+  }
+
+  ConstraintSets contacts(Real friction) const {
+    ConstraintSets sets;
+    sets.particle_tet_contact =
+        make_particle_tet_contacts({indices, barycentric, normals, friction}, state());
+    return sets;
+  }
+
+  Model model(Real friction, bool with_contacts) const {
+    Model m;
+    m.particles = state();
+    if (with_contacts) m.constraints = contacts(friction);
+    return m;
+  }
+};
+
+SolverSettings settings(SolverMode mode, std::size_t threads = 1) {
+  SolverSettings s;
+  s.mode = mode;
+  s.threads = threads;
+  s.gravity = Vector3r::Zero();
+  s.substeps = 1;
+  s.iterations = 8;
+  return s;
+}
+
+void expect_resolved(const Solver& solver, const ContactScene& scene, const char* what) {
+  for (std::size_t c = 0; c < kContacts; ++c) {
+    for (std::size_t k = 0; k < 4; ++k) {
+      const ParticleIndex p = ParticleIndex(5 * c + k);
+      EXPECT_EQ(solver.position(p), scene.positions[p]) << what << ": static vertex " << p;
+    }
+    // Pushed out onto the face (z = 0), within the iterations' convergence.
+    EXPECT_NEAR(solver.position(ParticleIndex(5 * c + 4)).z(), 0, Real(2e-3)) << what << " " << c;
+  }
+}
+
+TEST(Contacts, ModelContactsAreResolvedInEveryMode) {
+  const ContactScene scene;
+  for (const SolverMode mode : test::kSolverModes) {
+    Solver solver = make_solver(scene.model(0, true), settings(mode));
+    solver.step();
+    expect_resolved(solver, scene, test::mode_name(mode).c_str());
+    EXPECT_LT(solver.residual().of(ConstraintFamily::particle_tet_contact).max, 2e-3)
+        << test::mode_name(mode);
+  }
+}
+
+TEST(Contacts, DynamicContactsAreResolvedInEveryMode) {
+  const ContactScene scene;
+  for (const SolverMode mode : test::kSolverModes) {
+    Solver solver = make_solver(scene.model(0, false), settings(mode));
+    solver.set_dynamic_constraints(scene.contacts(0));
+    ASSERT_EQ(solver.dynamic_constraint_count(), kContacts);
+    solver.step();
+    expect_resolved(solver, scene, test::mode_name(mode).c_str());
+  }
+}
+
+TEST(Contacts, FrictionSlowsTheSlidingAndStopsItPastCoulombsLimit) {
+  const ContactScene scene;
+  // The normal impulse per unit mass of the step is the depth over the step (≈ 12 m/s), so
+  // μ = 0.05 takes about 0.6 m/s off the 1 m/s sliding, and μ = 0.5 (6 m/s) stops it.
+  for (const SolverMode mode : {SolverMode::gs, SolverMode::sequential}) {
+    const auto slide_after_step = [&](Real friction) {
+      Solver solver = make_solver(scene.model(friction, true), settings(mode));
+      solver.step();
+      return solver.velocity(ParticleIndex(4)).x();
+    };
+    const Real frictionless = slide_after_step(0), light = slide_after_step(Real(0.05)),
+               heavy = slide_after_step(Real(0.5));
+    EXPECT_NEAR(frictionless, 1, 1e-4) << test::mode_name(mode);
+    EXPECT_GT(light, Real(0.1)) << test::mode_name(mode);
+    EXPECT_LT(light, Real(0.8)) << test::mode_name(mode);
+    EXPECT_NEAR(heavy, 0, 1e-4) << test::mode_name(mode);
+  }
+}
+
+TEST(Contacts, ColouredAndSequentialAgreeAndThreadsDoNotChangeBits) {
+  const ContactScene scene;
+  Solver sequential = make_solver(scene.model(Real(0.05), true), settings(SolverMode::sequential));
+  Solver one = make_solver(scene.model(Real(0.05), true), settings(SolverMode::gs, 1));
+  Solver two = make_solver(scene.model(Real(0.05), true), settings(SolverMode::gs, 2));
+  for (int step = 0; step < 3; ++step) {
+    sequential.step();
+    one.step();
+    two.step();
+  }
+  EXPECT_TRUE(same_bits(one.positions(), two.positions()));
+  EXPECT_TRUE(same_bits(one.velocities(), two.velocities()));
+  for (std::size_t p = 0; p < scene.positions.size(); ++p) {
+    EXPECT_LT((one.position(ParticleIndex(p)) - sequential.position(ParticleIndex(p))).norm(), 1e-5);
+    EXPECT_LT((one.velocity(ParticleIndex(p)) - sequential.velocity(ParticleIndex(p))).norm(), 1e-4);
+  }
+}
+
+}  // namespace
+}  // namespace tessera

@@ -14,6 +14,7 @@
 
 #include <tessera/core/error.hpp>
 #include <tessera/core/simd.hpp>
+#include <tessera/parallel/threads.hpp>
 
 #include "constraint_family.hpp"
 #include "jacobi_set_builder.hpp"
@@ -260,7 +261,7 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
   if (options_.block_size == 0)
     throw InvalidInput("schedule: block size must be at least 1 constraint");
   options_.block_size = round_up(options_.block_size, kMaxLanes);
-  options_.threads = std::max<std::size_t>(options_.threads, 1);
+  options_.threads = worker_threads(options_.threads);
   const auto sizes = model.constraints.sizes();
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
     family_first_[f + 1] = family_first_[f] + ConstraintIndex(sizes[f]);

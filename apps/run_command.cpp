@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <oneapi/tbb/task_arena.h>
 
-#include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/run_colouring.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/model_graph.hpp>
 #include <tessera/core/error.hpp>

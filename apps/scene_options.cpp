@@ -1,3 +1,7 @@
+// The scene options shared by `run` and `color` (see scene_options.hpp): the material and pin
+// overrides are checked against io's own name tables before the scene spec is parsed, so a
+// typo is reported before any file is read; they then overwrite the parsed description
+// field by field.
 #include "scene_options.hpp"
 
 #include <array>

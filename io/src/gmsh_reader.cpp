@@ -248,6 +248,64 @@ class GmshReader {
     expect_section_end("Elements", counted(element_count, "element", "elements"));
   }
 
+  /// A 4.1 section ($Nodes or $Elements) read entity block by entity block: the records its
+  /// header declares, those its blocks held so far, and its names for the messages.
+  struct BlockSection {
+    std::string_view name;  // "Nodes"
+    std::string_view singular;
+    std::string_view plural;
+    std::uint64_t declared = 0;
+    std::uint64_t read = 0;
+  };
+
+  struct EntityBlock {
+    std::uint64_t dimension;
+    std::uint64_t third;  // $Nodes: the parametric flag; $Elements: the element type
+    std::uint64_t count;
+  };
+
+  /// The header line of entity block `block` (of `block_count`): '<entity dimension> <entity
+  /// tag> <third> <number of records>'. Checks the dimension (0 to 3), the tag, the third value
+  /// (0 or 1 when `third_is_flag`) and that the block holds no more than the section has left.
+  EntityBlock read_entity_block(const BlockSection& section, std::uint64_t block_count,
+                                std::uint64_t block, std::string_view third_layout,
+                                std::string_view third_name, bool third_is_flag) {
+    next_record_in(section.name, Progress{block_count, block, "entity blocks", {}});
+    const Location where = reader_.here();
+    if (words_.size() != 4) {
+      where.fail("expected an entity block header '<entity dimension> <entity tag> <" +
+                 std::string(third_layout) + "> <number of " + std::string(section.plural) +
+                 ">', found " + counted(words_.size(), "value", "values"));
+    }
+    EntityBlock entity{};
+    entity.dimension = parse_unsigned(words_[0], "entity dimension", where);
+    if (entity.dimension > 3)
+      where.fail("entity dimension " + std::to_string(entity.dimension) + " is not 0, 1, 2 or 3");
+    parse_signed(words_[1], "entity tag", where);
+    entity.third = parse_unsigned(words_[2], third_name, where);
+    if (third_is_flag && entity.third > 1)
+      where.fail(std::string(third_name) + " " + std::to_string(entity.third) + " is not 0 or 1");
+    entity.count = parse_unsigned(
+        words_[3], "number of " + std::string(section.plural) + " in the block", where);
+    const std::uint64_t left = section.declared - section.read;
+    if (entity.count > left) {
+      where.fail("the entity block holds " +
+                 counted(entity.count, section.singular, section.plural) + ", more than the " +
+                 std::to_string(left) + " left of the " + std::to_string(section.declared) +
+                 " the $" + std::string(section.name) + " header declares");
+    }
+    return entity;
+  }
+
+  /// After the last block: the blocks held as many records as the header declared.
+  void check_blocks_hold_all(const BlockSection& section) {
+    if (section.read != section.declared) {
+      reader_.fail("the $" + std::string(section.name) + " header declares " +
+                   counted(section.declared, section.singular, section.plural) +
+                   " but its blocks hold " + std::to_string(section.read));
+    }
+  }
+
   void read_nodes_v4() {
     std::uint64_t header[4] = {};
     read_section_header("Nodes", 4,
@@ -256,30 +314,13 @@ class GmshReader {
     const std::uint64_t node_count = header[1];
     reserve_at_most(mesh_.positions, node_count);
     std::vector<std::uint64_t> block_tags;
-    std::uint64_t read = 0;
+    BlockSection nodes{"Nodes", "node", "nodes", node_count};
+    std::uint64_t& read = nodes.read;
     for (std::uint64_t block = 0; block < block_count; ++block) {
-      next_record_in("Nodes", Progress{block_count, block, "entity blocks", {}});
-      const Location block_header = reader_.here();
-      if (words_.size() != 4) {
-        block_header.fail(
-            "expected an entity block header '<entity dimension> <entity tag> <parametric> "
-            "<number of nodes>', found " +
-            counted(words_.size(), "value", "values"));
-      }
-      const std::uint64_t dimension = parse_unsigned(words_[0], "entity dimension", block_header);
-      if (dimension > 3)
-        block_header.fail("entity dimension " + std::to_string(dimension) + " is not 0, 1, 2 or 3");
-      parse_signed(words_[1], "entity tag", block_header);
-      const std::uint64_t parametric = parse_unsigned(words_[2], "parametric flag", block_header);
-      if (parametric > 1)
-        block_header.fail("parametric flag " + std::to_string(parametric) + " is not 0 or 1");
-      const std::uint64_t in_block =
-          parse_unsigned(words_[3], "number of nodes in the block", block_header);
-      if (in_block > node_count - read) {
-        block_header.fail("the entity block holds " + counted(in_block, "node", "nodes") +
-                          ", more than the " + std::to_string(node_count - read) + " left of the " +
-                          std::to_string(node_count) + " the $Nodes header declares");
-      }
+      const EntityBlock entity =
+          read_entity_block(nodes, block_count, block, "parametric", "parametric flag", true);
+      const std::uint64_t dimension = entity.dimension, parametric = entity.third;
+      const std::uint64_t in_block = entity.count;
       block_tags.clear();
       block_tags.reserve(static_cast<std::size_t>(std::min(in_block, kReserveLimit)));
       for (std::uint64_t k = 0; k < in_block; ++k) {
@@ -306,10 +347,7 @@ class GmshReader {
         ++read;
       }
     }
-    if (read != node_count) {
-      reader_.fail("the $Nodes header declares " + counted(node_count, "node", "nodes") +
-                   " but its blocks hold " + std::to_string(read));
-    }
+    check_blocks_hold_all(nodes);
     expect_section_end("Nodes", counted(node_count, "node", "nodes"));
   }
 
@@ -320,30 +358,13 @@ class GmshReader {
                         header);
     const std::uint64_t block_count = header[0];
     const std::uint64_t element_count = header[1];
-    std::uint64_t read = 0;
+    BlockSection elements{"Elements", "element", "elements", element_count};
+    std::uint64_t& read = elements.read;
     for (std::uint64_t block = 0; block < block_count; ++block) {
-      next_record_in("Elements", Progress{block_count, block, "entity blocks", {}});
-      const Location block_header = reader_.here();
-      if (words_.size() != 4) {
-        block_header.fail(
-            "expected an entity block header '<entity dimension> <entity tag> <element type> "
-            "<number of elements>', found " +
-            counted(words_.size(), "value", "values"));
-      }
-      const std::uint64_t dimension = parse_unsigned(words_[0], "entity dimension", block_header);
-      if (dimension > 3)
-        block_header.fail("entity dimension " + std::to_string(dimension) + " is not 0, 1, 2 or 3");
-      parse_signed(words_[1], "entity tag", block_header);
-      const GmshElementType* type =
-          find_gmsh_element_type(parse_unsigned(words_[2], "element type", block_header));
-      const std::uint64_t in_block =
-          parse_unsigned(words_[3], "number of elements in the block", block_header);
-      if (in_block > element_count - read) {
-        block_header.fail("the entity block holds " + counted(in_block, "element", "elements") +
-                          ", more than the " + std::to_string(element_count - read) +
-                          " left of the " + std::to_string(element_count) +
-                          " the $Elements header declares");
-      }
+      const EntityBlock entity =
+          read_entity_block(elements, block_count, block, "element type", "element type", false);
+      const GmshElementType* type = find_gmsh_element_type(entity.third);
+      const std::uint64_t in_block = entity.count;
       for (std::uint64_t k = 0; k < in_block; ++k) {
         next_record_in("Elements", Progress{element_count, read, "elements", {}});
         ++read;
@@ -357,11 +378,7 @@ class GmshReader {
         add_element(*type, 1, parse_unsigned(words_[0], "element tag", where), where);
       }
     }
-    if (read != element_count) {
-      reader_.fail("the $Elements header declares " +
-                   counted(element_count, "element", "elements") + " but its blocks hold " +
-                   std::to_string(read));
-    }
+    check_blocks_hold_all(elements);
     expect_section_end("Elements", counted(element_count, "element", "elements"));
   }
 

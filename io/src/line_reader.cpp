@@ -27,6 +27,14 @@ bool parse_whole(std::string_view word, Integer& value, std::errc& error) {
   return result.ec == std::errc() && result.ptr == end;
 }
 
+/// The failure of a parse_whole: "<what> '<word>' <out_of_range>" when from_chars said the
+/// value does not fit, "<what> '<word>' <not_parsed>" otherwise.
+[[noreturn]] void fail_parse(std::string_view word, std::string_view what, const Location& where,
+                             std::errc error, const char* out_of_range, const char* not_parsed) {
+  where.fail(std::string(what) + " " + shown(word) + " " +
+             (error == std::errc::result_out_of_range ? out_of_range : not_parsed));
+}
+
 }  // namespace
 
 // ---- messages --------------------------------------------------------------------------
@@ -133,34 +141,26 @@ std::uint64_t parse_unsigned(std::string_view word, std::string_view what, const
   std::uint64_t value = 0;
   std::errc error{};
   if (parse_whole(without_plus(word), value, error)) return value;
-  if (error == std::errc::result_out_of_range) {
-    where.fail(std::string(what) + " " + shown(word) + " is too large");
-  }
   std::int64_t negative = 0;
-  if (parse_whole(word, negative, error) && negative < 0) {
+  std::errc ignored{};
+  if (parse_whole(word, negative, ignored) && negative < 0) {
     where.fail(std::string(what) + " " + std::string(word) + " is negative");
   }
-  where.fail(std::string(what) + " " + shown(word) + " is not an integer");
+  fail_parse(word, what, where, error, "is too large", "is not an integer");
 }
 
 std::int64_t parse_signed(std::string_view word, std::string_view what, const Location& where) {
   std::int64_t value = 0;
   std::errc error{};
   if (parse_whole(without_plus(word), value, error)) return value;
-  if (error == std::errc::result_out_of_range) {
-    where.fail(std::string(what) + " " + shown(word) + " is out of range");
-  }
-  where.fail(std::string(what) + " " + shown(word) + " is not an integer");
+  fail_parse(word, what, where, error, "is out of range", "is not an integer");
 }
 
 double parse_number(std::string_view word, std::string_view what, const Location& where) {
   double value = 0;
   std::errc error{};
   if (parse_whole(without_plus(word), value, error)) return value;
-  if (error == std::errc::result_out_of_range) {
-    where.fail(std::string(what) + " " + shown(word) + " is out of range for a double");
-  }
-  where.fail(std::string(what) + " " + shown(word) + " is not a number");
+  fail_parse(word, what, where, error, "is out of range for a double", "is not a number");
 }
 
 Real parse_coordinate(std::string_view word, std::string_view what, const Location& where) {

@@ -257,14 +257,25 @@ StrainTriangleConstraints strain_triangles(std::span<const Vector3r> positions,
   return result;
 }
 
+/// What make_shell and make_solid check at the door, in this order: the vertex count, the
+/// options, then the elements (`element` names one: "triangle", "tetrahedron") and the pins.
+template <class Options>
+void check_input(const std::string& context, std::span<const Vector3r> positions,
+                 std::span<const VertexIndex> elements, std::size_t vertices_per_element,
+                 const char* element, std::span<const VertexIndex> pinned, const Options& options) {
+  require_vertex_count_fits(context, positions.size());
+  check_options(context, options);
+  if (elements.empty())
+    throw InvalidInput(context + ": the mesh has no " +
+                       (vertices_per_element == 3 ? "triangles" : "tetrahedra"));
+  check_elements(context, elements, vertices_per_element, positions.size(), element);
+  check_pins(context, pinned, positions.size());
+}
+
 Model shell_in(const std::string& context, std::span<const Vector3r> positions,
                std::span<const VertexIndex> triangles, std::span<const VertexIndex> pinned,
                const ShellOptions& options) {
-  require_vertex_count_fits(context, positions.size());
-  check_options(context, options);
-  if (triangles.empty()) throw InvalidInput(context + ": the mesh has no triangles");
-  check_elements(context, triangles, 3, positions.size(), "triangle");
-  check_pins(context, pinned, positions.size());
+  check_input(context, positions, triangles, 3, "triangle", pinned, options);
 
   const TriangleTopology topology = triangle_topology(triangles);
   Model model;
@@ -308,11 +319,7 @@ Model shell_in(const std::string& context, std::span<const Vector3r> positions,
 Model solid_in(const std::string& context, std::span<const Vector3r> positions,
                std::span<const VertexIndex> tetrahedra, std::span<const VertexIndex> pinned,
                const SolidOptions& options) {
-  require_vertex_count_fits(context, positions.size());
-  check_options(context, options);
-  if (tetrahedra.empty()) throw InvalidInput(context + ": the mesh has no tetrahedra");
-  check_elements(context, tetrahedra, 4, positions.size(), "tetrahedron");
-  check_pins(context, pinned, positions.size());
+  check_input(context, positions, tetrahedra, 4, "tetrahedron", pinned, options);
 
   Model model;
   ConstraintSets& sets = model.constraints;

@@ -29,6 +29,20 @@ bool next_tetgen_record(LineReader& reader, std::vector<std::string_view>& words
   return false;
 }
 
+/// Reads the first data line of a TetGen file, its header, into `words`: at least one and at
+/// most `max_values` values laid out as `layout` (for the messages). Returns where it is.
+Location read_tetgen_header(LineReader& reader, std::vector<std::string_view>& words,
+                            std::size_t max_values, std::string_view layout) {
+  if (!next_tetgen_record(reader, words)) {
+    reader.fail("empty file (expected the header '" + std::string(layout) + "')");
+  }
+  if (words.size() > max_values) {
+    reader.fail("the header has " + std::to_string(words.size()) + " values (expected " +
+                std::string(layout) + ")");
+  }
+  return reader.here();
+}
+
 /// A per-line count from a header (attributes, markers): a line could never hold more.
 std::uint64_t parse_column_count(std::string_view word, std::string_view what,
                                  const Location& where) {
@@ -53,16 +67,8 @@ struct TetgenNumbering {
 
 TetgenNumbering read_tetgen_points(LineReader& reader, const std::string& node_name, Mesh& mesh) {
   std::vector<std::string_view> words;
-  if (!next_tetgen_record(reader, words)) {
-    reader.fail(
-        "empty file (expected the header '<#points> <dimension> <#attributes> <#boundary "
-        "markers>')");
-  }
-  if (words.size() > 4) {
-    reader.fail("the header has " + std::to_string(words.size()) +
-                " values (expected <#points> <dimension> <#attributes> <#boundary markers>)");
-  }
-  const Location header = reader.here();
+  const Location header = read_tetgen_header(
+      reader, words, 4, "<#points> <dimension> <#attributes> <#boundary markers>");
   const std::uint64_t point_count = parse_unsigned(words[0], "point count", header);
   const std::uint64_t dimension =
       words.size() > 1 ? parse_unsigned(words[1], "dimension", header) : 3;
@@ -175,15 +181,8 @@ void read_tetgen_elements(LineReader& reader, const TetgenNumbering& numbering,
 
 void read_tetgen_tetrahedra(LineReader& reader, const TetgenNumbering& numbering, Mesh& mesh) {
   std::vector<std::string_view> words;
-  if (!next_tetgen_record(reader, words)) {
-    reader.fail(
-        "empty file (expected the header '<#tetrahedra> <nodes per tetrahedron> <#attributes>')");
-  }
-  if (words.size() > 3) {
-    reader.fail("the header has " + std::to_string(words.size()) +
-                " values (expected <#tetrahedra> <nodes per tetrahedron> <#attributes>)");
-  }
-  const Location header = reader.here();
+  const Location header = read_tetgen_header(
+      reader, words, 3, "<#tetrahedra> <nodes per tetrahedron> <#attributes>");
   const std::uint64_t count = parse_unsigned(words[0], "tetrahedron count", header);
   const std::uint64_t nodes_per_tetrahedron =
       words.size() > 1 ? parse_unsigned(words[1], "nodes per tetrahedron", header) : 4;
@@ -201,14 +200,7 @@ void read_tetgen_tetrahedra(LineReader& reader, const TetgenNumbering& numbering
 
 void read_tetgen_triangles(LineReader& reader, const TetgenNumbering& numbering, Mesh& mesh) {
   std::vector<std::string_view> words;
-  if (!next_tetgen_record(reader, words)) {
-    reader.fail("empty file (expected the header '<#faces> <#boundary markers>')");
-  }
-  if (words.size() > 2) {
-    reader.fail("the header has " + std::to_string(words.size()) +
-                " values (expected <#faces> <#boundary markers>)");
-  }
-  const Location header = reader.here();
+  const Location header = read_tetgen_header(reader, words, 2, "<#faces> <#boundary markers>");
   const std::uint64_t count = parse_unsigned(words[0], "face count", header);
   const std::uint64_t marker_count = words.size() > 1 ? parse_marker_count(words[1], header) : 0;
   mesh.triangles.reserve(3 * static_cast<std::size_t>(std::min(count, kReserveLimit)));

@@ -9,10 +9,11 @@
 #include <nlohmann/json.hpp>
 #include <oneapi/tbb/task_arena.h>
 
-#include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/run_colouring.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/model_graph.hpp>
 #include <tessera/core/error.hpp>
+#include <tessera/parallel/threads.hpp>
 
 #include "commands.hpp"
 #include "option_checks.hpp"
@@ -56,7 +57,7 @@ int color_command(const ColorOptions& options) {
   const double seconds_graph =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - graph_start).count();
 
-  tbb::task_arena arena(options.threads ? int(*options.threads) : tbb::task_arena::automatic);
+  tbb::task_arena arena(int(worker_threads(options.threads.value_or(0))));
   const ColouringOptions colouring_options{
       .seed = options.seed, .balance = options.balance, .locality = options.locality};
   nlohmann::ordered_json results = nlohmann::ordered_json::array();

@@ -1,3 +1,7 @@
+// FrameOutput (see frame_output.hpp): the cells of a scene are gathered once, at
+// construction (the surface, then one cell per constraint of the families that have a cell
+// type, with its colour, family and id), and every write() pairs them with the frame's
+// positions and writes frame_NNNNN.vtu (and .obj), then rewrites frames.pvd.
 #include "frame_output.hpp"
 
 #include <cstdio>

@@ -2,13 +2,12 @@
 #include <iostream>
 #include <thread>
 
-#include <oneapi/tbb/info.h>
-
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/core/config.hpp>
 #include <tessera/core/real.hpp>
 #include <tessera/core/simd.hpp>
 #include <tessera/parallel/schedule.hpp>
+#include <tessera/parallel/threads.hpp>
 
 #include "commands.hpp"
 #include "summary.hpp"
@@ -29,7 +28,7 @@ int info_command(const InfoOptions& options) {
   summary.add("precision", std::string(sizeof(Real) == sizeof(double) ? "double" : "float"));
   summary.add("simd_target", active_simd_target());
   summary.add("simd_targets_available", available_simd_targets());
-  summary.add("threads_available", std::size_t(tbb::info::default_concurrency()));
+  summary.add("threads_available", worker_threads(0));  // what no --threads takes
   summary.add("hardware_threads", std::size_t(std::thread::hardware_concurrency()));
   const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   std::vector<std::string> strategies;

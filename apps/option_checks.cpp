@@ -1,3 +1,5 @@
+// The option validators of option_checks.hpp. Each parses the text itself (digits only for
+// integers, strtod for numbers) so that the message can quote what the user typed.
 #include "option_checks.hpp"
 
 #include <cerrno>

@@ -1,3 +1,5 @@
+// ProgressBar (see progress_bar.hpp): "\r[#####     ] 12/60 frames, 3.4 s" on stderr, redrawn
+// over itself with a carriage return, and erased with an ANSI clear-to-end-of-line when done.
 #include "progress_bar.hpp"
 
 #include <cstdio>

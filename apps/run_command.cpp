@@ -10,16 +10,18 @@
 #include <nlohmann/json.hpp>
 #include <oneapi/tbb/task_arena.h>
 
-#include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/run_colouring.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/model_graph.hpp>
 #include <tessera/core/error.hpp>
 #include <tessera/parallel/solver.hpp>
+#include <tessera/parallel/threads.hpp>
 
 #include "commands.hpp"
 #include "frame_output.hpp"
 #include "option_checks.hpp"
 #include "progress_bar.hpp"
+#include "solver_settings.hpp"
 #include "summary.hpp"
 
 namespace tessera::cli {
@@ -88,7 +90,7 @@ int run_command(const RunOptions& options) {
   const io::SceneDescription description = describe_scene(options.scene);
   const io::SimulationSettings simulation = simulation_of(description, options);
   // Names are checked before the (possibly large) scene is built.
-  const SolverMode mode = parse_solver_mode(simulation.mode);
+  const SolverSettings settings = solver_settings(simulation);
   const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   const ColouringStrategy& strategy = registry.get(simulation.strategy);
 
@@ -99,9 +101,9 @@ int run_command(const RunOptions& options) {
   // Colouring, in an arena of the solver's thread count (its result does not depend on it).
   const auto colouring_start = std::chrono::steady_clock::now();
   const ConstraintGraph graph = constraint_graph(scene.model);
-  tbb::task_arena arena(simulation.threads ? int(simulation.threads) : tbb::task_arena::automatic);
+  tbb::task_arena arena(int(worker_threads(settings.threads)));
   std::optional<ColouringRun> colouring;
-  if (mode != SolverMode::sequential)
+  if (settings.mode != SolverMode::sequential)
     arena.execute([&] {
       colouring = run_colouring(strategy, graph,
                                 ColouringOptions{.balance = options.balance, .locality = true});
@@ -116,14 +118,6 @@ int run_command(const RunOptions& options) {
     output.emplace(*options.out, scene, colouring ? &colouring->colouring : nullptr,
                    options.write_obj);
 
-  SolverSettings settings;
-  settings.mode = mode;
-  settings.threads = simulation.threads;
-  settings.time_step = simulation.time_step;
-  settings.substeps = simulation.substeps;
-  settings.iterations = simulation.iterations;
-  settings.gravity = simulation.gravity;
-  settings.velocity_damping = simulation.velocity_damping;
   const std::size_t particles = scene.model.particles.size();
   const std::size_t pinned = scene.pinned.size();
   Solver solver = colouring ? Solver(std::move(scene.model), colouring->colouring, settings)
@@ -152,7 +146,7 @@ int run_command(const RunOptions& options) {
   summary.add("colours", colouring ? colouring->statistics.colours : 0);
   summary.add("colour_lower_bound", graph.colour_lower_bound());
   summary.add("strategy", colouring ? simulation.strategy : std::string("none"));
-  summary.add("mode", std::string(solver_mode_name(mode)));
+  summary.add("mode", std::string(solver_mode_name(settings.mode)));
   summary.add("threads", statistics.threads);
   summary.add("frames", simulation.frames);
   summary.add("substeps", simulation.substeps);

@@ -1,3 +1,7 @@
+// The scene options shared by `run` and `color` (see scene_options.hpp): the material and pin
+// overrides are checked against io's own name tables before the scene spec is parsed, so a
+// typo is reported before any file is read; they then overwrite the parsed description
+// field by field.
 #include "scene_options.hpp"
 
 #include <array>
@@ -17,12 +21,6 @@ Enum choose(const std::string& option, const std::string& value,
   for (std::string_view name : names) known += (known.empty() ? "" : ", ") + std::string(name);
   throw InvalidInput(option + ": unknown value '" + value + "' (known: " + known + ")");
 }
-
-constexpr std::array<std::string_view, 3> kShellMaterials = {"distance", "strain_triangle",
-                                                             "fem_triangle"};
-constexpr std::array<std::string_view, 3> kBendings = {"dihedral", "isometric", "none"};
-constexpr std::array<std::string_view, 3> kSolidMaterials = {"fem_tetra", "strain_tetra",
-                                                             "volume_and_distance"};
 
 }  // namespace
 
@@ -45,14 +43,14 @@ io::SceneDescription describe_scene(const SceneOptions& options) {
   // The cheap checks of the overrides first, so a typo is reported before a big scene loads.
   const auto shell_material =
       options.shell_material ? std::optional(choose<io::ShellMaterial>(
-                                   "--shell-material", *options.shell_material, kShellMaterials))
+                                   "--shell-material", *options.shell_material, io::kShellMaterialNames))
                              : std::nullopt;
   const auto bending = options.bending ? std::optional(choose<io::ShellBending>(
-                                             "--bending", *options.bending, kBendings))
+                                             "--bending", *options.bending, io::kShellBendingNames))
                                        : std::nullopt;
   const auto solid_material =
       options.solid_material ? std::optional(choose<io::SolidMaterial>(
-                                   "--solid-material", *options.solid_material, kSolidMaterials))
+                                   "--solid-material", *options.solid_material, io::kSolidMaterialNames))
                              : std::nullopt;
   std::optional<io::PinRule> pins;
   if (options.pins) {

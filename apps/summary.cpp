@@ -1,3 +1,5 @@
+// Summary's printing (see summary.hpp), and the FNV-1a hash behind the tool's state_hash and
+// colouring_hash: 64-bit FNV-1a over the raw bytes, printed as 16 hex digits.
 #include "summary.hpp"
 
 #include <algorithm>

@@ -39,7 +39,7 @@
 #include <utility>
 #include <vector>
 
-#include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/run_colouring.hpp>
 #include <tessera/parallel/solver.hpp>
 
 #include "scenes.hpp"

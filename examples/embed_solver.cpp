@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/run_colouring.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/model_graph.hpp>
 #include <tessera/core/model.hpp>

@@ -4,12 +4,10 @@
 #include <tessera/coloring/colouring_statistics.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <limits>
 #include <sstream>
-
-#include <tessera/coloring/locality.hpp>
-#include <tessera/coloring/refinement.hpp>
+#include <string>
+#include <utility>
 
 namespace tessera {
 
@@ -95,28 +93,6 @@ std::string format_statistics(const ColouringStatistics& s) {
       << "seconds: " << s.seconds << "\n"
       << "valid: " << (s.valid ? "yes" : "no: " + s.problem) << "\n";
   return out.str();
-}
-
-ColouringRun run_colouring(const ColouringStrategy& strategy, const ConstraintGraph& graph,
-                           const ColouringOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  Colouring colouring = strategy.colour(graph, options);
-  std::string name(strategy.name());
-  if (options.reduce) {
-    colouring = reduce_colours(graph, colouring, options);
-    name += "+reduce";
-  }
-  if (options.balance) {
-    colouring = balance_colours(graph, colouring);
-    name += "+balance";
-  }
-  if (options.locality) {
-    colouring = improve_locality(graph, colouring);
-    name += "+locality";
-  }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  ColouringStatistics statistics = compute_statistics(graph, colouring, std::move(name), seconds);
-  return {std::move(colouring), std::move(statistics)};
 }
 
 }  // namespace tessera

@@ -1,3 +1,6 @@
+// The out-of-line half of ConstraintValidator (constraint_validation.hpp): the fail_* paths
+// that build the "<family> constraint <i>: <problem>" messages, and the checks of one value
+// (finite, positive, non-negative, a batch-wide parameter) that call them.
 #include "constraint_validation.hpp"
 
 #include <sstream>

@@ -1,3 +1,5 @@
+// advise_huge_pages (huge_pages.hpp): madvise(MADV_HUGEPAGE) on the 2 MiB-aligned interior
+// of a range of at least 4 MiB; a no-op off Linux or where MADV_HUGEPAGE is not defined.
 #include <tessera/core/huge_pages.hpp>
 
 #include <cstdint>

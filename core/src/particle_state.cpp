@@ -1,3 +1,6 @@
+// ParticleState's constructors (particle_state.hpp): every array allocated at the padded size
+// and zeroed, so padding particles are static at the origin; the validating constructor checks
+// each position and inverse mass before copying it in.
 #include <tessera/core/error.hpp>
 #include <tessera/core/particle_state.hpp>
 

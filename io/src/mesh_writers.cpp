@@ -106,6 +106,22 @@ class ChunkedText {
   std::string text_;
 };
 
+/// One line per position, `prefix` then "x y z" (VTU points, OBJ `v` lines).
+void append_positions(ChunkedText& chunks, const char* prefix,
+                      std::span<const Vector3r> positions) {
+  std::string& text = chunks.text();
+  for (const Vector3r& x : positions) {
+    text += prefix;
+    append_number(text, x.x());
+    text += ' ';
+    append_number(text, x.y());
+    text += ' ';
+    append_number(text, x.z());
+    text += '\n';
+    chunks.maybe_flush();
+  }
+}
+
 // ---- atomic file writing -------------------------------------------------------------------
 
 std::uint64_t mix_bits(std::uint64_t x) {  // splitmix64's finaliser
@@ -373,16 +389,7 @@ void write_vtu_body(std::ostream& out, const Frame& frame,
   text += "        <DataArray type=\"";
   text += kRealVtkType;
   text += "\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (const Vector3r& x : frame.positions) {
-    text += "          ";
-    append_number(text, x.x());
-    text += ' ';
-    append_number(text, x.y());
-    text += ' ';
-    append_number(text, x.z());
-    text += '\n';
-    chunks.maybe_flush();
-  }
+  append_positions(chunks, "          ", frame.positions);
   text += "        </DataArray>\n";
   text += "      </Points>\n";
 
@@ -438,16 +445,7 @@ void write_obj_body(std::ostream& out, const Frame& frame) {
   text += " vertices, ";
   append_number(text, triangle_count);
   text += " triangles\n";
-  for (const Vector3r& x : frame.positions) {
-    text += "v ";
-    append_number(text, x.x());
-    text += ' ';
-    append_number(text, x.y());
-    text += ' ';
-    append_number(text, x.z());
-    text += '\n';
-    chunks.maybe_flush();
-  }
+  append_positions(chunks, "v ", frame.positions);
   for (const CellBlock& block : frame.blocks) {
     if (block.type != CellType::triangle) continue;
     for (std::size_t i = 0; i < block.vertices.size(); i += 3) {

@@ -1,4 +1,5 @@
-// Scene specs and JSON scene files into SceneDescriptions, and descriptions into Scenes.
+// Scene specs and JSON scene files into SceneDescriptions (parsing only: building is
+// build_scene's, in scenes.cpp).
 //
 // The JSON reader walks the object key by key against a table of the keys it knows, so an
 // unknown or misspelt key is an error that names it, and every value is checked for its type
@@ -16,7 +17,6 @@
 #include <nlohmann/json.hpp>
 
 #include <tessera/core/error.hpp>
-#include <tessera/io/mesh_readers.hpp>
 
 namespace tessera::io {
 namespace {
@@ -54,28 +54,6 @@ bool parse_sizes(std::string_view text, std::size_t* sizes, std::size_t count) {
     text.remove_prefix(std::min(text.size(), end + 1));
   }
   return true;
-}
-
-/// The pins a rule picks among `positions`, or `defaults` for scene_default.
-std::vector<VertexIndex> pins_of(const PinRule& rule, std::span<const Vector3r> positions,
-                                 std::vector<VertexIndex> defaults) {
-  switch (rule.kind) {
-    case PinRule::Kind::scene_default: return defaults;
-    case PinRule::Kind::none: return {};
-    case PinRule::Kind::lowest: return lowest_vertices(positions, rule.axis);
-    case PinRule::Kind::highest: {
-      std::vector<Vector3r> mirrored(positions.begin(), positions.end());
-      for (Vector3r& p : mirrored) p = -p;
-      return lowest_vertices(mirrored, rule.axis);
-    }
-    case PinRule::Kind::list:
-      for (const VertexIndex v : rule.vertices)
-        if (v >= positions.size())
-          throw InvalidInput("pins: vertex " + std::to_string(v) + " is out of range (the scene has " +
-                             std::to_string(positions.size()) + " vertices)");
-      return rule.vertices;
-  }
-  return {};
 }
 
 /// Reads the keys of one JSON object against `fields`; throws for an unknown key.
@@ -176,19 +154,13 @@ class ObjectReader {
   std::string path_;
 };
 
-constexpr std::array<std::string_view, 3> kShellMaterials = {"distance", "strain_triangle",
-                                                             "fem_triangle"};
-constexpr std::array<std::string_view, 3> kShellBendings = {"dihedral", "isometric", "none"};
-constexpr std::array<std::string_view, 3> kSolidMaterials = {"fem_tetra", "strain_tetra",
-                                                             "volume_and_distance"};
-
 void read_shell(const ObjectReader& scene, const Json& json, ShellOptions& shell) {
   const ObjectReader reader(json, scene.file(), "shell");
   reader.only({"material", "bending", "distance_compliance", "bending_compliance",
                "youngs_modulus", "poisson_ratio", "mass"});
   std::size_t choice = 0;
-  if (reader.read_choice("material", kShellMaterials, choice)) shell.material = ShellMaterial(choice);
-  if (reader.read_choice("bending", kShellBendings, choice)) shell.bending = ShellBending(choice);
+  if (reader.read_choice("material", kShellMaterialNames, choice)) shell.material = ShellMaterial(choice);
+  if (reader.read_choice("bending", kShellBendingNames, choice)) shell.bending = ShellBending(choice);
   reader.read_real("distance_compliance", shell.distance_compliance, 0, true);
   reader.read_real("bending_compliance", shell.bending_compliance, 0, true);
   reader.read_real("youngs_modulus", shell.youngs_modulus, 0, false);
@@ -201,7 +173,7 @@ void read_solid(const ObjectReader& scene, const Json& json, SolidOptions& solid
   reader.only({"material", "youngs_modulus", "poisson_ratio", "volume_compliance",
                "distance_compliance", "mass"});
   std::size_t choice = 0;
-  if (reader.read_choice("material", kSolidMaterials, choice)) solid.material = SolidMaterial(choice);
+  if (reader.read_choice("material", kSolidMaterialNames, choice)) solid.material = SolidMaterial(choice);
   reader.read_real("youngs_modulus", solid.youngs_modulus, 0, false);
   reader.read_real("poisson_ratio", solid.poisson_ratio, 0, true, 0.5, false);
   reader.read_real("volume_compliance", solid.volume_compliance, 0, true);
@@ -411,90 +383,6 @@ SceneDescription parse_scene_json(std::istream& in, const std::string& name,
   } catch (const Json::exception& error) {  // every value's type is checked first: a safety net
     throw InvalidInput(name + ": " + error.what());
   }
-}
-
-std::vector<VertexIndex> boundary_triangles(std::span<const VertexIndex> tetrahedra) {
-  if (tetrahedra.size() % 4 != 0)
-    throw InvalidInput("boundary_triangles: " + std::to_string(tetrahedra.size()) +
-                       " indices are not a whole number of tetrahedra");
-  // Faces opposite vertex d, c, b, a, each oriented outwards for a positive tetrahedron.
-  constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  const std::size_t face_count = tetrahedra.size();  // 4 per tetrahedron
-  struct Face {
-    std::array<VertexIndex, 3> key;
-    std::size_t index;
-  };
-  std::vector<Face> faces(face_count);
-  for (std::size_t f = 0; f < face_count; ++f) {
-    const VertexIndex* tet = tetrahedra.data() + (f / 4) * 4;
-    std::array<VertexIndex, 3> key = {tet[kFaces[f % 4][0]], tet[kFaces[f % 4][1]],
-                                      tet[kFaces[f % 4][2]]};
-    std::sort(key.begin(), key.end());
-    faces[f] = {key, f};
-  }
-  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
-    return a.key != b.key ? a.key < b.key : a.index < b.index;
-  });
-  std::vector<bool> on_boundary(face_count, false);
-  for (std::size_t i = 0; i < face_count;) {
-    std::size_t j = i + 1;
-    while (j < face_count && faces[j].key == faces[i].key) ++j;
-    if (j == i + 1) on_boundary[faces[i].index] = true;
-    i = j;
-  }
-  std::vector<VertexIndex> triangles;
-  for (std::size_t f = 0; f < face_count; ++f)
-    if (on_boundary[f]) {
-      const VertexIndex* tet = tetrahedra.data() + (f / 4) * 4;
-      for (int k = 0; k < 3; ++k) triangles.push_back(tet[kFaces[f % 4][k]]);
-    }
-  return triangles;
-}
-
-Scene build_scene(const SceneDescription& description) {
-  Scene scene;
-  scene.description = description;
-  Mesh& mesh = scene.mesh;
-  std::vector<VertexIndex> default_pins;
-  switch (description.source) {
-    case SceneSource::cloth: {
-      const std::size_t columns = description.cloth_columns, rows = description.cloth_rows;
-      ClothGrid grid = make_cloth_grid(columns, rows, Real(1) / Real(std::max<std::size_t>(columns, 2) - 1));
-      for (Vector3r& p : grid.positions) p = Vector3r(p.x(), 0, p.y());
-      mesh.positions = std::move(grid.positions);
-      mesh.triangles = std::move(grid.triangle_indices);
-      default_pins = {VertexIndex((rows - 1) * columns), VertexIndex(rows * columns - 1)};
-      break;
-    }
-    case SceneSource::bar: {
-      TetrahedralBar bar = make_tetrahedral_bar(description.bar_cells[0], description.bar_cells[1],
-                                                description.bar_cells[2], Real(0.1));
-      for (std::size_t v = 0; v < bar.vertex_count(); ++v)
-        if (bar.positions[v].z() == 0) default_pins.push_back(VertexIndex(v));
-      mesh.positions = std::move(bar.positions);
-      mesh.tetrahedra = std::move(bar.tetrahedron_indices);
-      break;
-    }
-    case SceneSource::mesh: {
-      mesh = read_mesh(description.mesh_file);
-      if (mesh.tetrahedra.empty() && mesh.triangles.empty())
-        throw InvalidInput(description.mesh_file.string() + ": the mesh has no triangles and no tetrahedra");
-      PinRule rule;
-      rule.kind = mesh.tetrahedra.empty() ? PinRule::Kind::highest : PinRule::Kind::lowest;
-      default_pins = pins_of(rule, mesh.positions, {});
-      break;
-    }
-  }
-  scene.pinned = pins_of(description.pins, mesh.positions, std::move(default_pins));
-  if (!mesh.tetrahedra.empty()) {
-    mesh.triangles.clear();  // a solid's own triangles (TetGen .face, Gmsh surfaces) are not simulated
-    scene.model = make_solid(mesh.positions, mesh.tetrahedra, scene.pinned, description.solid);
-    scene.surface_triangles = boundary_triangles(mesh.tetrahedra);
-  } else {
-    scene.model = make_shell(mesh.positions, mesh.triangles, scene.pinned, description.shell);
-    scene.surface_triangles = mesh.triangles;
-  }
-  return scene;
 }
 
 }  // namespace tessera::io

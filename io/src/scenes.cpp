@@ -1,4 +1,6 @@
-// Scenes: shells, solids, the default cloth and bar, and read meshes as Models.
+// Scenes: shells, solids, the default cloth and bar, and read meshes as Models; and
+// build_scene, which builds a SceneDescription (scene_description.hpp) with them: geometry
+// generated or read, pins picked by the description's rule, the shell or solid made.
 //
 // Each builder validates what core does not see (options, pins, element lists as a whole),
 // then lets core's make_<family>_constraints validate the constraints themselves, re-throwing
@@ -8,6 +10,7 @@
 // batch is built against that array, and its particle indices are then pointed back at the
 // mesh's vertices (validated here beforehand, as core would have).
 #include <tessera/io/scenes.hpp>
+#include <tessera/io/scene_description.hpp>
 
 #include <algorithm>
 #include <array>
@@ -254,14 +257,25 @@ StrainTriangleConstraints strain_triangles(std::span<const Vector3r> positions,
   return result;
 }
 
+/// What make_shell and make_solid check at the door, in this order: the vertex count, the
+/// options, then the elements (`element` names one: "triangle", "tetrahedron") and the pins.
+template <class Options>
+void check_input(const std::string& context, std::span<const Vector3r> positions,
+                 std::span<const VertexIndex> elements, std::size_t vertices_per_element,
+                 const char* element, std::span<const VertexIndex> pinned, const Options& options) {
+  require_vertex_count_fits(context, positions.size());
+  check_options(context, options);
+  if (elements.empty())
+    throw InvalidInput(context + ": the mesh has no " +
+                       (vertices_per_element == 3 ? "triangles" : "tetrahedra"));
+  check_elements(context, elements, vertices_per_element, positions.size(), element);
+  check_pins(context, pinned, positions.size());
+}
+
 Model shell_in(const std::string& context, std::span<const Vector3r> positions,
                std::span<const VertexIndex> triangles, std::span<const VertexIndex> pinned,
                const ShellOptions& options) {
-  require_vertex_count_fits(context, positions.size());
-  check_options(context, options);
-  if (triangles.empty()) throw InvalidInput(context + ": the mesh has no triangles");
-  check_elements(context, triangles, 3, positions.size(), "triangle");
-  check_pins(context, pinned, positions.size());
+  check_input(context, positions, triangles, 3, "triangle", pinned, options);
 
   const TriangleTopology topology = triangle_topology(triangles);
   Model model;
@@ -305,11 +319,7 @@ Model shell_in(const std::string& context, std::span<const Vector3r> positions,
 Model solid_in(const std::string& context, std::span<const Vector3r> positions,
                std::span<const VertexIndex> tetrahedra, std::span<const VertexIndex> pinned,
                const SolidOptions& options) {
-  require_vertex_count_fits(context, positions.size());
-  check_options(context, options);
-  if (tetrahedra.empty()) throw InvalidInput(context + ": the mesh has no tetrahedra");
-  check_elements(context, tetrahedra, 4, positions.size(), "tetrahedron");
-  check_pins(context, pinned, positions.size());
+  check_input(context, positions, tetrahedra, 4, "tetrahedron", pinned, options);
 
   Model model;
   ConstraintSets& sets = model.constraints;
@@ -340,6 +350,58 @@ Model solid_in(const std::string& context, std::span<const Vector3r> positions,
   return model;
 }
 
+/// A generated scene's mesh with the particles its source pins by default.
+struct PinnedMesh {
+  Mesh mesh;
+  std::vector<VertexIndex> pinned;
+};
+
+/// The default cloth (make_cloth_scene): 1 m wide in the xz plane, hung from the two corners
+/// of its last row.
+PinnedMesh cloth_mesh(std::size_t columns, std::size_t rows) {
+  ClothGrid grid = columns < 2 ? make_cloth_grid(columns, rows)  // reports the size
+                               : make_cloth_grid(columns, rows, Real(1) / Real(columns - 1));
+  for (Vector3r& p : grid.positions) p = Vector3r(p.x(), 0, p.y());
+  PinnedMesh cloth;
+  cloth.mesh.positions = std::move(grid.positions);
+  cloth.mesh.triangles = std::move(grid.triangle_indices);
+  cloth.pinned = {VertexIndex((rows - 1) * columns), VertexIndex(rows * columns - 1)};
+  return cloth;
+}
+
+/// The default bar (make_bar_scene): 0.1 m cells, fixed at z = 0.
+PinnedMesh bar_mesh(const std::array<std::size_t, 3>& cells) {
+  TetrahedralBar bar = make_tetrahedral_bar(cells[0], cells[1], cells[2], Real(0.1));
+  PinnedMesh pinned_bar;
+  for (std::size_t v = 0; v < bar.vertex_count(); ++v)
+    if (bar.positions[v].z() == 0) pinned_bar.pinned.push_back(VertexIndex(v));
+  pinned_bar.mesh.positions = std::move(bar.positions);
+  pinned_bar.mesh.tetrahedra = std::move(bar.tetrahedron_indices);
+  return pinned_bar;
+}
+
+/// The pins a rule picks among `positions`, or `defaults` for scene_default.
+std::vector<VertexIndex> pins_of(const PinRule& rule, std::span<const Vector3r> positions,
+                                 std::vector<VertexIndex> defaults) {
+  switch (rule.kind) {
+    case PinRule::Kind::scene_default: return defaults;
+    case PinRule::Kind::none: return {};
+    case PinRule::Kind::lowest: return lowest_vertices(positions, rule.axis);
+    case PinRule::Kind::highest: {
+      std::vector<Vector3r> mirrored(positions.begin(), positions.end());
+      for (Vector3r& p : mirrored) p = -p;
+      return lowest_vertices(mirrored, rule.axis);
+    }
+    case PinRule::Kind::list:
+      for (const VertexIndex v : rule.vertices)
+        if (v >= positions.size())
+          throw InvalidInput("pins: vertex " + std::to_string(v) + " is out of range (the scene has " +
+                             std::to_string(positions.size()) + " vertices)");
+      return rule.vertices;
+  }
+  return {};
+}
+
 }  // namespace
 
 Model make_shell(std::span<const Vector3r> positions, std::span<const VertexIndex> triangles,
@@ -354,25 +416,16 @@ Model make_solid(std::span<const Vector3r> positions, std::span<const VertexInde
 
 Model make_cloth_scene(std::size_t columns, std::size_t rows, const ShellOptions& options) {
   const std::string context = "cloth scene";
-  ClothGrid grid = with_context(context, [&] {
-    if (columns < 2) return make_cloth_grid(columns, rows);  // reports the size
-    return make_cloth_grid(columns, rows, Real(1) / Real(columns - 1));
-  });
-  for (Vector3r& p : grid.positions) p = Vector3r(p.x(), 0, p.y());
-  const std::array<VertexIndex, 2> pinned = {VertexIndex((rows - 1) * columns),
-                                             VertexIndex(rows * columns - 1)};
-  return shell_in(context, grid.positions, grid.triangle_indices, pinned, options);
+  const PinnedMesh cloth = with_context(context, [&] { return cloth_mesh(columns, rows); });
+  return shell_in(context, cloth.mesh.positions, cloth.mesh.triangles, cloth.pinned, options);
 }
 
 Model make_bar_scene(std::size_t cells_x, std::size_t cells_y, std::size_t cells_z,
                      const SolidOptions& options) {
   const std::string context = "bar scene";
-  const TetrahedralBar bar = with_context(
-      context, [&] { return make_tetrahedral_bar(cells_x, cells_y, cells_z, Real(0.1)); });
-  std::vector<VertexIndex> pinned;
-  for (std::size_t v = 0; v < bar.vertex_count(); ++v)
-    if (bar.positions[v].z() == 0) pinned.push_back(VertexIndex(v));
-  return solid_in(context, bar.positions, bar.tetrahedron_indices, pinned, options);
+  const PinnedMesh bar =
+      with_context(context, [&] { return bar_mesh({cells_x, cells_y, cells_z}); });
+  return solid_in(context, bar.mesh.positions, bar.mesh.tetrahedra, bar.pinned, options);
 }
 
 Model make_model(const Mesh& mesh, std::span<const VertexIndex> pinned, const ShellOptions& shell,
@@ -425,6 +478,84 @@ std::vector<Real> lumped_masses(std::span<const Vector3r> positions,
   check_elements(context, elements, vertices_per_element, positions.size(),
                  vertices_per_element == 3 ? "triangle" : "tetrahedron");
   return lumped_masses_in(context, positions, elements, vertices_per_element, total_mass);
+}
+
+std::vector<VertexIndex> boundary_triangles(std::span<const VertexIndex> tetrahedra) {
+  if (tetrahedra.size() % 4 != 0)
+    throw InvalidInput("boundary_triangles: " + std::to_string(tetrahedra.size()) +
+                       " indices are not a whole number of tetrahedra");
+  // Faces opposite vertex d, c, b, a, each oriented outwards for a positive tetrahedron.
+  constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  const std::size_t face_count = tetrahedra.size();  // 4 per tetrahedron
+  struct Face {
+    std::array<VertexIndex, 3> key;
+    std::size_t index;
+  };
+  std::vector<Face> faces(face_count);
+  for (std::size_t f = 0; f < face_count; ++f) {
+    const VertexIndex* tet = tetrahedra.data() + (f / 4) * 4;
+    std::array<VertexIndex, 3> key = {tet[kFaces[f % 4][0]], tet[kFaces[f % 4][1]],
+                                      tet[kFaces[f % 4][2]]};
+    std::sort(key.begin(), key.end());
+    faces[f] = {key, f};
+  }
+  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
+    return a.key != b.key ? a.key < b.key : a.index < b.index;
+  });
+  std::vector<bool> on_boundary(face_count, false);
+  for (std::size_t i = 0; i < face_count;) {
+    std::size_t j = i + 1;
+    while (j < face_count && faces[j].key == faces[i].key) ++j;
+    if (j == i + 1) on_boundary[faces[i].index] = true;
+    i = j;
+  }
+  std::vector<VertexIndex> triangles;
+  for (std::size_t f = 0; f < face_count; ++f)
+    if (on_boundary[f]) {
+      const VertexIndex* tet = tetrahedra.data() + (f / 4) * 4;
+      for (int k = 0; k < 3; ++k) triangles.push_back(tet[kFaces[f % 4][k]]);
+    }
+  return triangles;
+}
+
+Scene build_scene(const SceneDescription& description) {
+  Scene scene;
+  scene.description = description;
+  Mesh& mesh = scene.mesh;
+  std::vector<VertexIndex> default_pins;
+  switch (description.source) {
+    case SceneSource::cloth: {
+      PinnedMesh cloth = cloth_mesh(description.cloth_columns, description.cloth_rows);
+      mesh = std::move(cloth.mesh);
+      default_pins = std::move(cloth.pinned);
+      break;
+    }
+    case SceneSource::bar: {
+      PinnedMesh bar = bar_mesh(description.bar_cells);
+      mesh = std::move(bar.mesh);
+      default_pins = std::move(bar.pinned);
+      break;
+    }
+    case SceneSource::mesh: {
+      mesh = read_mesh(description.mesh_file);
+      if (mesh.tetrahedra.empty() && mesh.triangles.empty())
+        throw InvalidInput(description.mesh_file.string() + ": the mesh has no triangles and no tetrahedra");
+      PinRule rule;
+      rule.kind = mesh.tetrahedra.empty() ? PinRule::Kind::highest : PinRule::Kind::lowest;
+      default_pins = pins_of(rule, mesh.positions, {});
+      break;
+    }
+  }
+  scene.pinned = pins_of(description.pins, mesh.positions, std::move(default_pins));
+  if (!mesh.tetrahedra.empty()) {
+    mesh.triangles.clear();  // a solid's own triangles (TetGen .face, Gmsh surfaces) are not simulated
+    scene.model = make_solid(mesh.positions, mesh.tetrahedra, scene.pinned, description.solid);
+    scene.surface_triangles = boundary_triangles(mesh.tetrahedra);
+  } else {
+    scene.model = make_shell(mesh.positions, mesh.triangles, scene.pinned, description.shell);
+    scene.surface_triangles = mesh.triangles;
+  }
+  return scene;
 }
 
 }  // namespace tessera::io

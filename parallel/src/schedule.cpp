@@ -17,6 +17,7 @@
 
 #include <tessera/core/error.hpp>
 #include <tessera/core/simd.hpp>
+#include <tessera/parallel/threads.hpp>
 
 #include "batch_reorder.hpp"
 #include "jacobi_set.hpp"
@@ -38,7 +39,7 @@ ScheduleOptions checked(ScheduleOptions options) {
   if (options.block_size == 0)
     throw InvalidInput("schedule: block size must be at least 1 constraint");
   options.block_size = round_up(options.block_size, kMaxLanes);
-  options.threads = std::max<std::size_t>(options.threads, 1);
+  options.threads = worker_threads(options.threads);
   return options;
 }
 

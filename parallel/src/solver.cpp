@@ -12,12 +12,12 @@
 #include <string>
 
 #include <oneapi/tbb/blocked_range.h>
-#include <oneapi/tbb/info.h>
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/partitioner.h>
 
 #include <tessera/core/error.hpp>
 #include <tessera/core/sequential_projection.hpp>
+#include <tessera/parallel/threads.hpp>
 
 #include "jacobi_set.hpp"
 #include "residual_sum.hpp"
@@ -125,10 +125,8 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
     : settings_(settings) {
   check_settings(settings_);
   const auto start = Clock::now();
-  const std::size_t threads = settings_.mode == SolverMode::sequential ? 1
-                              : settings_.threads == 0
-                                  ? std::size_t(tbb::info::default_concurrency())
-                                  : settings_.threads;
+  const std::size_t threads =
+      settings_.mode == SolverMode::sequential ? 1 : worker_threads(settings_.threads);
   schedule_ = Schedule(model, &colouring,
                        {settings_.mode, settings_.block_size, settings_.hybrid_threshold, threads});
   state_ = scheduled_particles(model.particles, schedule_);

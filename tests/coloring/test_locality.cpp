@@ -6,6 +6,7 @@
 #include <random>
 
 #include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/run_colouring.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/locality.hpp>
 

@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/run_colouring.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/particle_partition.hpp>
 #include <tessera/coloring/refinement.hpp>

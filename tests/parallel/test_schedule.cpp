@@ -10,6 +10,7 @@
 
 #include <tessera/core/error.hpp>
 #include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/run_colouring.hpp>
 #include <tessera/parallel/schedule.hpp>
 
 #include "scenes.hpp"

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/run_colouring.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/io/generators.hpp>
 #include <tessera/coloring/model_graph.hpp>

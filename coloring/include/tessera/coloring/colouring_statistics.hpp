@@ -1,5 +1,6 @@
 // Measuring and checking a colouring: sizes, balance, distance from the lower bound, time,
 // and validate(), the check that no two constraints of one colour share a movable particle.
+// Running a strategy and measuring its result in one call is run_colouring.hpp.
 #pragma once
 
 #include <cstddef>
@@ -7,7 +8,6 @@
 #include <vector>
 
 #include <tessera/coloring/colouring.hpp>
-#include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/constraint_graph.hpp>
 
 namespace tessera {
@@ -47,16 +47,5 @@ ColouringStatistics compute_statistics(const ConstraintGraph& graph, const Colou
 
 /// "key: value" lines (strategy, constraints, colours, sizes, largest, ...), for tools.
 std::string format_statistics(const ColouringStatistics& statistics);
-
-/// A colouring and its statistics.
-struct ColouringRun {
-  Colouring colouring;
-  ColouringStatistics statistics;
-};
-
-/// Runs `strategy`, then the post-passes the options ask for (reduce, balance, locality), timing
-/// the whole and validating the result.
-ColouringRun run_colouring(const ColouringStrategy& strategy, const ConstraintGraph& graph,
-                           const ColouringOptions& options = {});
 
 }  // namespace tessera

@@ -2,6 +2,7 @@
 // becomes a cloth shell (in-plane distance edges or strain/FEM triangles, plus bending across
 // interior edges), a tetrahedral mesh a solid (FEM or strain tetrahedra, or volume + distance);
 // the default cloth and bar scenes of the tests, benchmarks and tool are built the same way.
+// build_scene (scene_description.hpp) builds a whole described scene with these.
 //
 // Rules every builder here follows:
 //   * Particles are the mesh's vertices in the mesh's numbering (so results can be written
@@ -26,8 +27,10 @@
 //     ("shell: triangle 4 has zero area").
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include <tessera/core/model.hpp>
@@ -43,6 +46,9 @@ enum class ShellBending {
   isometric,  ///< isometric bending (quadratic, for nearly inextensible cloth)
   none,
 };
+/// The names of ShellBending's values, in order (scene files, the tool's --bending).
+inline constexpr std::array<std::string_view, 3> kShellBendingNames = {"dihedral", "isometric",
+                                                                      "none"};
 
 /// In-plane material of a shell.
 enum class ShellMaterial {
@@ -50,6 +56,9 @@ enum class ShellMaterial {
   strain_triangle,  ///< strain-based triangles, material axes per triangle (x along p0 → p1)
   fem_triangle,     ///< FEM triangles, isotropic (orthotropic with equal axes)
 };
+/// The names of ShellMaterial's values, in order (scene files, the tool's --shell-material).
+inline constexpr std::array<std::string_view, 3> kShellMaterialNames = {
+    "distance", "strain_triangle", "fem_triangle"};
 
 struct ShellOptions {
   ShellMaterial material = ShellMaterial::distance;
@@ -72,6 +81,9 @@ enum class SolidMaterial {
   strain_tetra,         ///< strain-based tetrahedra (unit stiffnesses)
   volume_and_distance,  ///< volume per tetrahedron plus distance per unique edge
 };
+/// The names of SolidMaterial's values, in order (scene files, the tool's --solid-material).
+inline constexpr std::array<std::string_view, 3> kSolidMaterialNames = {
+    "fem_tetra", "strain_tetra", "volume_and_distance"};
 
 struct SolidOptions {
   SolidMaterial material = SolidMaterial::fem_tetra;
@@ -128,6 +140,11 @@ std::vector<VertexIndex> lowest_vertices(std::span<const Vector3r> positions,
 /// index out of [0, vertex_count) or a vertex repeated within a triangle.
 std::vector<VertexIndex> bending_stencils(std::span<const VertexIndex> triangles,
                                           std::size_t vertex_count);
+
+/// The triangles on the boundary of a tetrahedral mesh: every face that belongs to exactly
+/// one tetrahedron, oriented outwards when the tetrahedron is positively oriented, in the
+/// order of the tetrahedra. Throws InvalidInput for an index count not a multiple of 4.
+std::vector<VertexIndex> boundary_triangles(std::span<const VertexIndex> tetrahedra);
 
 /// Lumped vertex masses of a mesh of elements with `vertices_per_element` (3: triangles by
 /// area, 4: tetrahedra by volume) vertices: `total_mass` spread over the elements in

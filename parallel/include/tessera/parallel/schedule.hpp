@@ -51,7 +51,8 @@ struct ScheduleOptions {
   std::size_t block_size = kDefaultBlockSize;
   std::size_t hybrid_threshold = kDefaultHybridThreshold;
   /// Threads the blocks are for: a colour is cut into smaller blocks (down to kMaxLanes) when
-  /// it has fewer than 4 per thread of block_size. Any value gives the same results.
+  /// it has fewer than 4 per thread of block_size. Any value gives the same results; 0 means
+  /// every hardware thread (worker_threads).
   std::size_t threads = 1;
 };
 

@@ -49,7 +49,7 @@ inline constexpr Real kDefaultJacobiRelaxation = Real(1.5);
 
 struct SolverSettings {
   SolverMode mode = SolverMode::gs;
-  /// Worker threads; 0 takes every hardware thread TBB reports.
+  /// Worker threads; 0 takes every hardware thread TBB reports (worker_threads, threads.hpp).
   std::size_t threads = 0;
   /// XPBD compliance (default) or PBD stiffness. Families without an XPBD form (the three
   /// proximity families, strain, FEM triangle, shape matching) use their PBD stiffness in

@@ -1,0 +1,91 @@
+// A scene description: the plain settings a scene is made from (where its geometry comes
+// from, which particles are pinned, the shell and solid materials, how it is simulated), and
+// build_scene, which turns one into a Model plus the mesh to draw it with.
+//
+//   parse (scene_file.hpp) ──► SceneDescription ──► build_scene() ──► Scene { Model, mesh }
+//
+// The description is data only: it is filled by the parsers of scene_file.hpp, by a program
+// directly, or by the tool's options, and build_scene reads nothing but it (and the mesh file
+// it names). The simulation settings are io's own plain struct: io depends on core only, so
+// the tool maps them to the solver's SolverSettings (apps/solver_settings.hpp).
+//
+// Pins. "default" is each source's own choice: the generated cloth hangs from the two corners
+// of its last row, the generated bar is fixed at z = 0, a tetrahedral mesh stands on its
+// lowest vertices along y ("lowest-y") and a triangle mesh hangs from its highest
+// ("highest-y"). "lowest-<axis>" / "highest-<axis>" pin every vertex within 1e-6 of the
+// bounding-box diagonal of the extreme coordinate; a list names vertex numbers.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <tessera/core/model.hpp>
+#include <tessera/core/real.hpp>
+#include <tessera/io/generators.hpp>    // VertexIndex
+#include <tessera/io/mesh_readers.hpp>  // Mesh
+#include <tessera/io/scenes.hpp>        // ShellOptions, SolidOptions, the builders
+
+namespace tessera::io {
+
+/// Where a scene's geometry comes from.
+enum class SceneSource { cloth, bar, mesh };
+
+/// Which particles a scene pins (inverse mass 0); see the top of this file.
+struct PinRule {
+  enum class Kind { scene_default, none, lowest, highest, list };
+  Kind kind = Kind::scene_default;
+  std::size_t axis = 1;              ///< lowest / highest: 0 = x, 1 = y, 2 = z
+  std::vector<VertexIndex> vertices;  ///< list
+};
+
+/// How long and how finely a scene is simulated, and with which strategy, mode and threads.
+/// The tool's options override these field by field.
+struct SimulationSettings {
+  Vector3r gravity = Vector3r(0, Real(-9.81), 0);
+  Real time_step = Real(1) / Real(60);
+  /// Many substeps of few iterations: for the same number of projections, 16 × 2 leaves a
+  /// 128² cloth 7× less stretched than 4 × 10 (XPBD's "small steps" observation).
+  std::size_t substeps = 16;
+  std::size_t iterations = 2;
+  std::size_t frames = 60;
+  Real velocity_damping = 0;
+  std::string strategy = "stencil";
+  std::string mode = "gs";
+  /// 0: every hardware thread (the solver's meaning, tessera::worker_threads).
+  std::size_t threads = 0;
+};
+
+struct SceneDescription {
+  /// Shown in summaries: the spec or the scene file's "name".
+  std::string name;
+  SceneSource source = SceneSource::cloth;
+  /// cloth: vertices along x and along z; bar: cells along x, y, z.
+  std::size_t cloth_columns = 64, cloth_rows = 64;
+  std::array<std::size_t, 3> bar_cells{4, 4, 20};
+  /// mesh: the file (any extension read_mesh knows).
+  std::filesystem::path mesh_file;
+  PinRule pins;
+  ShellOptions shell;
+  SolidOptions solid;
+  SimulationSettings simulation;
+};
+
+/// A scene ready to simulate: the model and the mesh it came from (rest positions in the
+/// model's particle numbering, its triangles and tetrahedra; for a tetrahedral mesh also its
+/// boundary triangles, so a viewer or OBJ writer has a surface to draw).
+struct Scene {
+  SceneDescription description;
+  Model model;
+  Mesh mesh;
+  std::vector<VertexIndex> surface_triangles;
+  std::vector<VertexIndex> pinned;
+};
+
+/// Generates or reads the geometry, applies the pins and materials. Throws InvalidInput
+/// (unreadable or bad mesh files with their own messages, a pin out of range, ...).
+Scene build_scene(const SceneDescription& description);
+
+}  // namespace tessera::io

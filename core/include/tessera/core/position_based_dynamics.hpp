@@ -1,5 +1,7 @@
 // The scalar kernel API: one constraint projection per call, with the names, parameter order
 // and meaning of the PositionBasedDynamics API (shared/spec/PositionBasedDynamics-API.txt).
+// Where results differ from the reference implementation of that API, and what a porting
+// user changes, is in docs/differences-from-pbd.md.
 //
 // Every solve_ function computes position corrections and never moves the particles itself:
 // the caller adds corr_i to p_i. Shared conventions, unless a function says otherwise:
@@ -33,7 +35,8 @@ class PositionBasedDynamics {
   // ---------------------------------------------------------------------------------------
   /// Distance constraint (Müller et al. 2007):
   ///   C(p0, p1) = |p0 - p1| - l0,   ∇_{p0} C = n = (p0 - p1)/|p0 - p1|,  ∇_{p1} C = -n.
-  /// Degenerate when p0 and p1 coincide.
+  /// Degenerate when p0 and p1 coincide (the reference returns true there; see
+  /// docs/differences-from-pbd.md, C6).
   static bool solve_DistanceConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                        Real invMass1, const Real restLength,
                                        const Real stiffness, Vector3r& corr0, Vector3r& corr1);
@@ -51,6 +54,8 @@ class PositionBasedDynamics {
   /// and fully folded stencils give finite corrections. Where the sign is zero (φ = 0 or π) it
   /// is taken as +1: a flat stencil with φ0 > 0 buckles deterministically. Degenerate when the
   /// edge has zero length or a triangle has zero area.
+  /// Differs from the reference: true when only the edge is movable, φ accurate near π
+  /// (docs/differences-from-pbd.md, C6 and C7).
   static bool solve_DihedralConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                        Real invMass1, const Vector3r& p2, Real invMass2,
                                        const Vector3r& p3, Real invMass3, const Real restAngle,
@@ -65,6 +70,8 @@ class PositionBasedDynamics {
   ///   ∇_{p3} C = (p1 - p0) × (p2 - p0) / 6,  ∇_{p0} C = -(∇_{p1} + ∇_{p2} + ∇_{p3}).
   /// Degenerate only when Σ w_i |∇_i C|² vanishes (all four points on one line, or every
   /// particle static): a flat tetrahedron with a proper face is projected (inflated to V0).
+  /// Differs from the reference, whose ∇C lacks the 1/6: its step is 1/6 of this one
+  /// (docs/differences-from-pbd.md, B1).
   static bool solve_VolumeConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                      Real invMass1, const Vector3r& p2, Real invMass2,
                                      const Vector3r& p3, Real invMass3, const Real restVolume,
@@ -77,7 +84,8 @@ class PositionBasedDynamics {
   ///   C = |p - q| - d0,   ∇_p C = n,  ∇_{p0} C = -(1 - t) n,  ∇_{p1} C = -t n.
   /// compressionStiffness applies when C < 0, stretchStiffness when C ≥ 0.
   /// A zero-length segment counts as the point p0 (t = 0). Degenerate when p lies on the
-  /// segment.
+  /// segment. Differs from the reference, which measures t from p1
+  /// (docs/differences-from-pbd.md, B2).
   static bool solve_EdgePointDistanceConstraint(const Vector3r& p, Real invMass,
                                                 const Vector3r& p0, Real invMass0,
                                                 const Vector3r& p1, Real invMass1,
@@ -93,7 +101,8 @@ class PositionBasedDynamics {
   /// |(p1 - p0) × (p2 - p0)|² ≤ kDegenerateTolerance |p1 - p0|² |p2 - p0|²) is measured to its
   /// longest edge (for zero area the longest edge covers the other two, so the closest point
   /// is exact; the choice does not depend on rounding). Degenerate when p lies on the
-  /// triangle.
+  /// triangle. Differs from the reference, which picks the edge by the first negative
+  /// barycentric coordinate (docs/differences-from-pbd.md, B3).
   static bool solve_TrianglePointDistanceConstraint(
       const Vector3r& p, Real invMass, const Vector3r& p0, Real invMass0, const Vector3r& p1,
       Real invMass1, const Vector3r& p2, Real invMass2, const Real restDist,
@@ -107,7 +116,8 @@ class PositionBasedDynamics {
   ///   ∇_{p3} C = -t n.
   /// Stiffness as for the point–edge constraint. A zero-length segment counts as its first
   /// point (s = 0 or t = 0); for parallel segments one closest pair of the overlap is used.
-  /// Degenerate when the segments touch.
+  /// Degenerate when the segments touch. Differs from the reference, which clamps s and t
+  /// independently (docs/differences-from-pbd.md, B4).
   static bool solve_EdgeEdgeDistanceConstraint(const Vector3r& p0, Real invMass0,
                                                const Vector3r& p1, Real invMass1,
                                                const Vector3r& p2, Real invMass2,
@@ -127,6 +137,8 @@ class PositionBasedDynamics {
   /// symmetric positive semi-definite, each row summing to zero, and K·x = 0 for the
   /// coordinates of any planar configuration. Q is indexed in parameter order p0, p1, p2, p3.
   /// Returns false for a degenerate rest stencil (zero-length edge, zero-area triangle).
+  /// Differs from the reference: Q(i, j) = -2 Q_ref(π(i), π(j)), π(p0..p3) = (2, 3, 0, 1)
+  /// (docs/differences-from-pbd.md, C1).
   static bool init_IsometricBendingConstraint(const Vector3r& p0, const Vector3r& p1,
                                               const Vector3r& p2, const Vector3r& p3,
                                               Matrix4r& Q);
@@ -136,7 +148,8 @@ class PositionBasedDynamics {
   /// evaluated through its factor as C = ½ |u|², ∇_{pi} C = k_i u with u = Σ_j k_j p_j, so a
   /// stencil flat up to rounding moves by rounding only. A stencil with ∇C = 0 (flat for its
   /// Q) satisfies the constraint: zero corrections and true. False (zero corrections) when
-  /// every particle is static.
+  /// every particle is static. A Q built by the reference (negative semi-definite) counts as
+  /// flat here: recompute it (docs/differences-from-pbd.md, C1).
   static bool solve_IsometricBendingConstraint(const Vector3r& p0, Real invMass0,
                                                const Vector3r& p1, Real invMass1,
                                                const Vector3r& p2, Real invMass2,
@@ -165,6 +178,8 @@ class PositionBasedDynamics {
   /// rank < 2 (every current or rest point on one line; a planar cluster is fine), with
   /// allowStretch when A_qq is singular (rest points coplanar). Rank is judged relative to
   /// the largest singular value / eigenvalue.
+  /// Differs from the reference: A_qq⁻¹ with allowStretch, static particles untouched,
+  /// det R = +1 (docs/differences-from-pbd.md, B5).
   static bool solve_ShapeMatchingConstraint(const Vector3r x0[], const Vector3r x[],
                                             const Real invMasses[], const int numPoints,
                                             const Vector3r& restCm, const Real stiffness,
@@ -193,6 +208,7 @@ class PositionBasedDynamics {
   /// when an active sub-constraint is degenerate (a normalized column of length ≤
   /// kDegenerateTolerance, or a vanishing weighted gradient, e.g. the triangle collapsed to
   /// a point or every particle static).
+  /// Differs from the reference's order xx, xy, yy (docs/differences-from-pbd.md, C2).
   static bool solve_StrainTriangleConstraint(const Vector3r& p0, Real invMass0,
                                              const Vector3r& p1, Real invMass1,
                                              const Vector3r& p2, Real invMass2,
@@ -213,7 +229,8 @@ class PositionBasedDynamics {
   /// Gauss–Seidel order: stretch xx, yy, zz (C = |f_i|² - 1, or |f_i| - 1 normalized) with
   /// stretchStiffness[i], then shear xy, xz, yz (C = f_i · f_j, or normalized by |f_i||f_j|)
   /// with shearStiffness[0], [1], [2]. Zero stiffness and degenerate cases as for the
-  /// triangle.
+  /// triangle. Differs from the reference's order xx, xy, yy, xz, yz, zz
+  /// (docs/differences-from-pbd.md, C2).
   static bool solve_StrainTetraConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                           Real invMass1, const Vector3r& p2, Real invMass2,
                                           const Vector3r& p3, Real invMass3,
@@ -229,7 +246,8 @@ class PositionBasedDynamics {
   /// the first Piola–Kirchhoff stress sigma = P (Bender et al. 2014, eq. 14):
   ///   H = restVolume · sigma · invRestMatᵀ,   J[1..3] = columns 0..2 of H,
   ///   J[0] = -(J[1] + J[2] + J[3]).
-  /// Vertex order as in computeGreenStrainAndPiolaStress: J[k] belongs to x_{k+1}.
+  /// Vertex order as in computeGreenStrainAndPiolaStress: J[k] belongs to x_{k+1}. The
+  /// reference implementation uses x4 as reference vertex (docs/differences-from-pbd.md, C3).
   static void computeGradCGreen(Real restVolume, const Matrix3r& invRestMat,
                                 const Matrix3r& sigma, Vector3r* J);
 
@@ -237,6 +255,7 @@ class PositionBasedDynamics {
   ///   F = [x2 - x1, x3 - x1, x4 - x1] · invRestMat,   epsilon = ½ (FᵀF - I),
   ///   S = 2 mu epsilon + lambda tr(epsilon) I,  sigma = P = F S,
   ///   energy = restVolume · (mu epsilon:epsilon + ½ lambda tr(epsilon)²).
+  /// The reference implementation uses x4 as reference vertex (docs/differences-from-pbd.md, C3).
   static void computeGreenStrainAndPiolaStress(const Vector3r& x1, const Vector3r& x2,
                                                const Vector3r& x3, const Vector3r& x4,
                                                const Matrix3r& invRestMat,
@@ -250,7 +269,8 @@ class PositionBasedDynamics {
   /// below at kInversionMinStretch; epsilon, S and the energy are evaluated on F̂ and
   ///   epsilon = V ε̂ Vᵀ,   sigma = U (F̂ Ŝ) Vᵀ.
   /// For an uninverted F whose singular values are all above the clamp it equals
-  /// computeGreenStrainAndPiolaStress.
+  /// computeGreenStrainAndPiolaStress. The reference returns epsilon = U ε̂ Vᵀ, not
+  /// symmetric (docs/differences-from-pbd.md, B6).
   static void computeGreenStrainAndPiolaStressInversion(
       const Vector3r& x1, const Vector3r& x2, const Vector3r& x3, const Vector3r& x4,
       const Matrix3r& invRestMat, const Real restVolume, const Real mu, const Real lambda,
@@ -266,7 +286,8 @@ class PositionBasedDynamics {
   ///   a = (p1 - p0)/|p1 - p0|,  b = n̂ × a,  n = (p1 - p0) × (p2 - p0),
   /// D = [[a·(p1 - p0), a·(p2 - p0)], [b·(p1 - p0), b·(p2 - p0)]], invRestMat = D⁻¹ and
   /// area = ½ |n|. The material x axis is the rest edge p0→p1. Returns false (area = 0,
-  /// invRestMat = 0) when the rest area is at most kDegenerateTolerance.
+  /// invRestMat = 0) when the rest area is at most kDegenerateTolerance. The reference starts
+  /// at p2 with x perpendicular to p0p1 (docs/differences-from-pbd.md, C3).
   static bool init_FEMTriangleConstraint(const Vector3r& p0, const Vector3r& p1,
                                          const Vector3r& p2, Real& area, Matrix2r& invRestMat);
 
@@ -282,7 +303,8 @@ class PositionBasedDynamics {
   /// vanish: zero corrections, true. Returns false when the gradient is degenerate (e.g. the
   /// triangle collapsed to a point, every particle static) or the material is not positive
   /// definite (a non-positive E_x, E_y or G, ν_xy ν_yx ≥ 1, or a symmetrised 2×2 normal block
-  /// with non-positive determinant).
+  /// with non-positive determinant). The reference's S_xy is G ε_xy, and its x and y axes are
+  /// swapped (docs/differences-from-pbd.md, B7 and C3).
   static bool solve_FEMTriangleConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                           Real invMass1, const Vector3r& p2, Real invMass2,
                                           const Real& area, const Matrix2r& invRestMat,
@@ -293,6 +315,7 @@ class PositionBasedDynamics {
 
   /// D = [p1 - p0, p2 - p0, p3 - p0], invRestMat = D⁻¹, volume = |det D| / 6. Returns false
   /// (volume = 0, invRestMat = 0) for a flat rest tetrahedron, volume ≤ kDegenerateTolerance.
+  /// The reference implementation uses p3 as reference vertex (docs/differences-from-pbd.md, C3).
   static bool init_FEMTetraConstraint(const Vector3r& p0, const Vector3r& p1,
                                       const Vector3r& p2, const Vector3r& p3, Real& volume,
                                       Matrix3r& invRestMat);
@@ -306,6 +329,8 @@ class PositionBasedDynamics {
   /// corrections are zero and true is returned. Returns false for E ≤ 0, ν ∉ (-1, 0.5), or a
   /// degenerate gradient (e.g. collapsed to a point without handleInversion, every particle
   /// static). E and restVolume scale C and ∇C alike, so they cancel in the PBD step.
+  /// Differs from the reference in the inversion switch, E = 0 and the ν range
+  /// (docs/differences-from-pbd.md, B8, C4 and C6).
   static bool solve_FEMTetraConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                        Real invMass1, const Vector3r& p2, Real invMass2,
                                        const Vector3r& p3, Real invMass3, const Real restVolume,
@@ -343,6 +368,8 @@ class PositionBasedDynamics {
   /// lambda accumulates over the iterations of one step (start it at 0). A separated contact
   /// (C > 0 and λ = 0) gives zero corrections and returns true. Returns false (zero
   /// corrections, λ unchanged) when constraintInfo(0, 2) is not positive, i.e. init_ failed.
+  /// The reference is two-sided and ignores x[3]'s inverse mass in its early-out
+  /// (docs/differences-from-pbd.md, B9 and C5).
   static bool solve_ParticleTetContactConstraint(
       const Real invMass0, const Vector3r& x0, const Real invMass[], const Vector3r x[],
       const Vector3r& bary, Eigen::Matrix<Real, 3, 3, Eigen::DontAlign>& constraintInfo,
@@ -355,7 +382,8 @@ class PositionBasedDynamics {
   ///   corr_v0 = -w0 p t,  corr_v[i] = w_i b_i p t.
   /// Returns false (zero corrections) when there is no tangential motion (|u_t| ≤
   /// kDegenerateTolerance), no normal impulse (frictionCoeff · lambda ≤ 0) or both sides are
-  /// static. constraintInfo is only read (its normal column).
+  /// static. constraintInfo is only read (its normal column). The reference uses the
+  /// velocities from init_ instead (docs/differences-from-pbd.md, C5).
   static bool velocitySolve_ParticleTetContactConstraint(
       const Real invMass0, const Vector3r& x0, const Vector3r& v0, const Real invMass[],
       const Vector3r x[], const Vector3r v[], const Vector3r& bary, const Real lambda,

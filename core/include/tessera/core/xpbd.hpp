@@ -9,6 +9,8 @@
 // gradients, vertex orders and degenerate cases are those of the PositionBasedDynamics
 // function of the same name. On false (degenerate input, dt ≤ 0, negative compliance) the
 // corrections are zero and λ is left unchanged.
+// The reference implementation takes a stiffness k (α̃ = 1/(k dt²), k = 0 hard): pass
+// compliance 1/k, and 0 for k = 0 (docs/differences-from-pbd.md, "XPBD takes compliance").
 #pragma once
 
 #include <tessera/core/real.hpp>
@@ -17,13 +19,15 @@ namespace tessera {
 
 class XPBD {
  public:
-  /// C = |p0 - p1| - l0.
+  /// C = |p0 - p1| - l0. Both ends static: false, λ unchanged (the reference still changes
+  /// λ; docs/differences-from-pbd.md, C6).
   static bool solve_DistanceConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                        Real invMass1, const Real restLength,
                                        const Real compliance, const Real dt, Real& lambda,
                                        Vector3r& corr0, Vector3r& corr1);
 
   /// C = acos(n̂1 · n̂2) - φ0 (vertex order of PositionBasedDynamics::solve_DihedralConstraint).
+  /// Differs from the reference as the PBD form does (docs/differences-from-pbd.md, C6, C7).
   static bool solve_DihedralConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                        Real invMass1, const Vector3r& p2, Real invMass2,
                                        const Vector3r& p3, Real invMass3, const Real restAngle,
@@ -31,7 +35,8 @@ class XPBD {
                                        Vector3r& corr0, Vector3r& corr1, Vector3r& corr2,
                                        Vector3r& corr3);
 
-  /// C = (1/6) ((p1 - p0) × (p2 - p0)) · (p3 - p0) - V0.
+  /// C = (1/6) ((p1 - p0) × (p2 - p0)) · (p3 - p0) - V0. The reference's ∇C lacks the 1/6
+  /// (docs/differences-from-pbd.md, B1).
   static bool solve_VolumeConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                      Real invMass1, const Vector3r& p2, Real invMass2,
                                      const Vector3r& p3, Real invMass3, const Real restVolume,
@@ -39,13 +44,18 @@ class XPBD {
                                      Vector3r& corr0, Vector3r& corr1, Vector3r& corr2,
                                      Vector3r& corr3);
 
-  /// Same Q as PositionBasedDynamics::init_IsometricBendingConstraint.
+  /// Same Q as PositionBasedDynamics::init_IsometricBendingConstraint: -2 times the
+  /// reference's, reordered (docs/differences-from-pbd.md, C1).
   static bool init_IsometricBendingConstraint(const Vector3r& p0, const Vector3r& p1,
                                               const Vector3r& p2, const Vector3r& p3,
                                               Matrix4r& Q);
 
   /// C = ½ Σ_ij Q_ij p_i · p_j. A stencil with ∇C = 0 (flat for its Q) returns true with zero
   /// corrections and λ unchanged.
+  /// Compliance scale: our Q is -2 times the reference's, so its C is a·C with a = -½. XPBD on
+  /// a·C with compliance α is XPBD on C with compliance α/a² = 4α: the reference's stiffness
+  /// k (α̃ = 1/(k dt²)) is compliance 4/k here (our compliance 4c is its stiffness 1/c), and
+  /// λ = -λ_ref / 2 (docs/differences-from-pbd.md, C1).
   static bool solve_IsometricBendingConstraint(const Vector3r& p0, Real invMass0,
                                                const Vector3r& p1, Real invMass1,
                                                const Vector3r& p2, Real invMass2,
@@ -63,7 +73,9 @@ class XPBD {
   /// shape (C below the degenerate tolerance) the gradient is undefined: the corrections are
   /// zero and true is returned (λ unchanged). Returns false for ν ∉ (-1, 0.5) or
   /// restVolume ≤ 0, besides the shared cases (dt ≤ 0, negative compliance, degenerate
-  /// gradient).
+  /// gradient). The reference takes (youngsModulus, poissonRatio) where this takes
+  /// (poissonRatio, compliance = 1/E), and its multiplier accumulates Δλ/C
+  /// (docs/differences-from-pbd.md, B10).
   static bool solve_FEMTetraConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                        Real invMass1, const Vector3r& p2, Real invMass2,
                                        const Vector3r& p3, Real invMass3, const Real restVolume,

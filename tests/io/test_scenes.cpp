@@ -22,7 +22,7 @@
 namespace tessera::io {
 namespace {
 
-const std::filesystem::path kDataDir = std::filesystem::path(__FILE__).parent_path() / "data";
+const std::filesystem::path kDataDir = TESSERA_TEST_DATA_DIR;
 
 std::size_t family_size(const Model& model, ConstraintFamily family) {
   return model.constraints.sizes()[static_cast<std::size_t>(family)];

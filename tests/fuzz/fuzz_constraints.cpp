@@ -174,7 +174,7 @@ void add_family(Bytes& in, const Decoded& d, ConstraintSets& sets) {
         barycentric.emplace_back(in.value(), in.value(), in.value());
         // Mostly unit normals, sometimes not.
         const Vector3r normal(in.value(), in.value(), in.value());
-        normals.push_back(in.byte() < 224 && normal.norm() > Real(1e-3) ? normal.normalized()
+        normals.push_back(in.byte() < 224 && normal.norm() > Real(1e-3) ? Vector3r(normal.normalized())
                                                                          : normal);
       }
       const ParticleState state(d.positions, d.inverse_masses);

@@ -21,8 +21,8 @@ using test::same_bits;
 constexpr std::size_t kContacts = 20;
 constexpr Real kDepth = Real(0.2);
 
-/// kContacts unit tets, static, 2 m apart along y; particle c sits kDepth below the face
-/// z = 0 of tet c (inside it) sliding along x at 1 m/s. Contact c: the face's outward normal +z, the contact
+/// kContacts unit tets, static, 2 m apart along y; particle c sits kDepth below the face z = 0 of
+/// tet c (inside it) sliding along x at 1 m/s. Contact c: the face's outward normal +z, the contact
 /// point below the particle on that face.
 struct ContactScene {
   std::vector<Vector3r> positions;

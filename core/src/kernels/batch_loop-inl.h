@@ -6,7 +6,7 @@
 //     project with PBD stiffness or XPBD compliance          (projection-inl.h)
 //     store λ of the active lanes, scatter movable particles (batch-inl.h)
 //
-// Why: the distance, dihedral, volume, isometric bending and the three proximity kernels
+// Why: the fixed-arity families with one stiffness (or compliance and λ) per constraint
 // differ only in their formula, rest data and where their stiffness comes from; sharing the
 // loop keeps their gather/project/scatter identical (so an improvement to one is an
 // improvement to all) and keeps each family's file about its formula.

@@ -3,7 +3,7 @@
 // API (isometric_bending.cpp) and on W lanes by the batched kernel
 // (isometric_bending_constraints.cpp).
 //
-// Vertex order as for the dihedral constraint: p2-p3 is the shared edge, the triangles are
+// Vertex order of a bending stencil: p2-p3 is the shared edge, the triangles are
 // (p0, p2, p3) and (p1, p3, p2). Q (4×4, from the rest shape, indexed p0..p3) is constant and
 // of rank one, Q = k kᵀ (k = √(3/(A0+A1)) · K, K the cotangent Laplacian row), so with the
 // discrete mean-curvature vector u = Σ_j k_j p_j

@@ -30,8 +30,8 @@ namespace tessera {
 /// outlive the ConstraintGraph's construction (the graph copies what it needs).
 class ConstraintGroup {
  public:
-  /// Constraints of `arity` particles each, stored back to back in `indices`
-  /// (indices.size() must be a multiple of arity): distance 2, triangle 3, tetra/dihedral 4.
+  /// Constraints of `arity` particles each, stored back to back in `indices` (indices.size() must
+  /// be a multiple of arity): an edge 2, a triangle 3, a tetrahedron or bending stencil 4.
   static ConstraintGroup fixed_arity(std::string name, std::size_t arity,
                                      std::span<const ParticleIndex> indices);
   /// Constraints of varying size in CSR form: constraint i names

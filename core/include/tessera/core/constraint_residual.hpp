@@ -3,12 +3,12 @@
 //
 // Why one function per family: each family's raw C has its own units (metres, cubic metres,
 // radians, energy), and a family's RMS must be comparable from one iteration to the next and
-// between scenes of different size. So every overload returns a normalised violation ≥ 0 at
-// the current positions, dimensionless wherever the family has a natural reference (rest
-// length, rest volume, rest distance, the identity strain, the rest cluster size); the comment of
-// each family's overload (in its header, <family>_constraints.hpp) names its measure and units. Where the family's lane formula
-// (core/src/kernels/<family>-inl.h) gives C, the residual is evaluated through it on one lane,
-// so it is the violation the kernel itself sees.
+// between scenes of different size. So every overload returns a normalised violation ≥ 0 at the
+// current positions, dimensionless wherever the family has a natural reference (rest length, rest
+// volume, rest distance, the identity strain, the rest cluster size); the comment of each family's
+// overload (in its header, <family>_constraints.hpp) names its measure and units. Where the
+// family's lane formula (core/src/kernels/<family>-inl.h) gives C, the residual is evaluated
+// through it on one lane, so it is the violation the kernel itself sees.
 //
 // Every function is finite for finite positions, also for degenerate configurations (all
 // particles at one point, a zero-length edge...): each comment says what such a configuration

@@ -69,20 +69,22 @@ void project_dihedral_constraints(ParticleArrays particles, DihedralConstraints&
 
 /// The batched kernel (project_dihedral_constraints).
 inline void project_constraints(ParticleArrays particles, DihedralConstraints& batch,
-                                std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
   project_dihedral_constraints(particles, batch, begin, end, settings);
 }
 
-/// Sequential reference (sequential_projection.hpp). Dihedral: PositionBasedDynamics::solve_DihedralConstraint with (rest_angle, stiffness), or
+/// Sequential reference (sequential_projection.hpp). Dihedral:
+/// PositionBasedDynamics::solve_DihedralConstraint with (rest_angle, stiffness), or
 /// XPBD::solve_DihedralConstraint with (rest_angle, compliance, settings.dt, lambda).
 void project_sequentially(ParticleArrays particles, DihedralConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings);
 
-/// Residual (constraint_residual.hpp). Dihedral: |φ − φ0| in radians, φ ∈ [0, π] the angle between the wing normals exactly as
-/// the dihedral formula computes it. A degenerate stencil (zero-length shared edge or a
-/// zero-area wing) has no defined angle; it reads the formula's value there, φ = 0 for a
-/// stencil collapsed to one point (so the residual is φ0), always finite and ≤ π.
+/// Residual (constraint_residual.hpp). Dihedral: |φ − φ0| in radians, φ ∈ [0, π] the angle between
+/// the wing normals exactly as the dihedral formula computes it. A degenerate stencil (zero-length
+/// shared edge or a zero-area wing) has no defined angle; it reads the formula's value there, φ = 0
+/// for a stencil collapsed to one point (so the residual is φ0), always finite and ≤ π.
 void constraint_residuals(const ParticleArrays& particles, const DihedralConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out);
 

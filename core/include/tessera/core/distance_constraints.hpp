@@ -62,19 +62,21 @@ void project_distance_constraints(ParticleArrays particles, DistanceConstraints&
 
 /// The batched kernel (project_distance_constraints).
 inline void project_constraints(ParticleArrays particles, DistanceConstraints& batch,
-                                std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
   project_distance_constraints(particles, batch, begin, end, settings);
 }
 
-/// Sequential reference (sequential_projection.hpp). Distance: stiffness semantics → PositionBasedDynamics::solve_DistanceConstraint with
-/// (rest_length, stiffness); compliance semantics → XPBD::solve_DistanceConstraint with
-/// (rest_length, compliance, settings.dt, lambda).
+/// Sequential reference (sequential_projection.hpp). Distance: stiffness semantics →
+/// PositionBasedDynamics::solve_DistanceConstraint with (rest_length, stiffness); compliance
+/// semantics → XPBD::solve_DistanceConstraint with (rest_length, compliance, settings.dt, lambda).
 void project_sequentially(ParticleArrays particles, DistanceConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings);
 
-/// Residual (constraint_residual.hpp). Distance: relative stretch |‖p0 − p1‖ − l0| / l0 (dimensionless). Coincident particles
-/// read 1. (A zero l0, which the builder rejects, would read |‖p0 − p1‖|.)
+/// Residual (constraint_residual.hpp). Distance: relative stretch |‖p0 − p1‖ − l0| / l0
+/// (dimensionless). Coincident particles read 1. (A zero l0, which the builder rejects, would read
+/// |‖p0 − p1‖|.)
 void constraint_residuals(const ParticleArrays& particles, const DistanceConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out);
 

@@ -78,21 +78,23 @@ void project_fem_tetra_constraints(ParticleArrays particles, FEMTetraConstraints
 
 /// The batched kernel (project_fem_tetra_constraints).
 inline void project_constraints(ParticleArrays particles, FEMTetraConstraints& batch,
-                                std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
   project_fem_tetra_constraints(particles, batch, begin, end, settings);
 }
 
-/// Sequential reference (sequential_projection.hpp). FEM tetrahedron: PositionBasedDynamics::solve_FEMTetraConstraint with (volume, invRestMat,
-/// youngs_modulus, poisson_ratio, handle_inversion), or XPBD::solve_FEMTetraConstraint with
-/// (volume, invRestMat, poisson_ratio, compliance, handle_inversion, settings.dt, lambda).
+/// Sequential reference (sequential_projection.hpp). FEM tetrahedron:
+/// PositionBasedDynamics::solve_FEMTetraConstraint with (volume, invRestMat, youngs_modulus,
+/// poisson_ratio, handle_inversion), or XPBD::solve_FEMTetraConstraint with (volume, invRestMat,
+/// poisson_ratio, compliance, handle_inversion, settings.dt, lambda).
 void project_sequentially(ParticleArrays particles, FEMTetraConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings);
 
-/// Residual (constraint_residual.hpp). FEM tetrahedron: ‖E‖_F of the 3×3 Green strain E = ½ (FᵀF − I), F = [p1 − p0, p2 − p0,
-/// p3 − p0] · invRestMat (the kernel's F and ε; the plain strain even where the kernel's
-/// inversion handling evaluates a clamped one, so a mirrored element reads 0). Dimensionless
-/// and independent of the material; collapsed to one point: √3 / 2.
+/// Residual (constraint_residual.hpp). FEM tetrahedron: ‖E‖_F of the 3×3 Green strain E = ½ (FᵀF −
+/// I), F = [p1 − p0, p2 − p0, p3 − p0] · invRestMat (the kernel's F and ε; the plain strain even
+/// where the kernel's inversion handling evaluates a clamped one, so a mirrored element reads 0).
+/// Dimensionless and independent of the material; collapsed to one point: √3 / 2.
 void constraint_residuals(const ParticleArrays& particles, const FEMTetraConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out);
 

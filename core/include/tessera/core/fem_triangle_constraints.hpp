@@ -74,20 +74,22 @@ void project_fem_triangle_constraints(ParticleArrays particles,
 
 /// The batched kernel (project_fem_triangle_constraints).
 inline void project_constraints(ParticleArrays particles, FEMTriangleConstraints& batch,
-                                std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
   project_fem_triangle_constraints(particles, batch, begin, end, settings);
 }
 
-/// Sequential reference (sequential_projection.hpp). FEM triangle: PositionBasedDynamics::solve_FEMTriangleConstraint with (area, invRestMat,
+/// Sequential reference (sequential_projection.hpp). FEM triangle:
+/// PositionBasedDynamics::solve_FEMTriangleConstraint with (area, invRestMat,
 /// youngs_modulus_x/y/shear, poisson_ratio_xy/yx). No XPBD form: the PBD form under either
 /// semantics.
 void project_sequentially(ParticleArrays particles, const FEMTriangleConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings);
 
-/// Residual (constraint_residual.hpp). FEM triangle: ‖E‖_F of the 2×2 Green strain E = ½ (FᵀF − I), F = [p1 − p0, p2 − p0] ·
-/// invRestMat in the triangle's own rest frame (any orientation in space), as in the kernel.
-/// Dimensionless and independent of the material; collapsed to one point: √2 / 2.
+/// Residual (constraint_residual.hpp). FEM triangle: ‖E‖_F of the 2×2 Green strain E = ½ (FᵀF − I),
+/// F = [p1 − p0, p2 − p0] · invRestMat in the triangle's own rest frame (any orientation in space),
+/// as in the kernel. Dimensionless and independent of the material; collapsed to one point: √2 / 2.
 void constraint_residuals(const ParticleArrays& particles, const FEMTriangleConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out);
 

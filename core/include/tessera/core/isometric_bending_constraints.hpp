@@ -78,23 +78,25 @@ void project_isometric_bending_constraints(ParticleArrays particles,
 
 /// The batched kernel (project_isometric_bending_constraints).
 inline void project_constraints(ParticleArrays particles, IsometricBendingConstraints& batch,
-                                std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
   project_isometric_bending_constraints(particles, batch, begin, end, settings);
 }
 
-/// Sequential reference (sequential_projection.hpp). Isometric bending: PositionBasedDynamics::solve_IsometricBendingConstraint with
-/// (Q = batch.matrix(c), stiffness), or XPBD::solve_IsometricBendingConstraint with
-/// (Q, compliance, settings.dt, lambda). Q = k kᵀ is rebuilt from the stored factor k.
+/// Sequential reference (sequential_projection.hpp). Isometric bending:
+/// PositionBasedDynamics::solve_IsometricBendingConstraint with (Q = batch.matrix(c), stiffness),
+/// or XPBD::solve_IsometricBendingConstraint with (Q, compliance, settings.dt, lambda). Q = k kᵀ is
+/// rebuilt from the stored factor k.
 void project_sequentially(ParticleArrays particles, IsometricBendingConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings);
 
-/// Residual (constraint_residual.hpp). Isometric bending: |u| = |Σ_j k_j p_j| = sqrt(2C), the discrete mean-curvature vector of
-/// the kernel's C = ½ |u|² (Q = k kᵀ). Dimensionless: k scales as 1/length (Q as 1/area), so
-/// scaling a stencil leaves |u| unchanged, like the bending energy. The model assumes a flat
-/// rest shape: a rigid motion of a flat rest stencil reads 0, while a curved rest stencil
-/// reads its own rest curvature (the kernel's C is not 0 there either). A stencil collapsed
-/// to one point reads 0.
+/// Residual (constraint_residual.hpp). Isometric bending: |u| = |Σ_j k_j p_j| = sqrt(2C), the
+/// discrete mean-curvature vector of the kernel's C = ½ |u|² (Q = k kᵀ). Dimensionless: k scales as
+/// 1/length (Q as 1/area), so scaling a stencil leaves |u| unchanged, like the bending energy. The
+/// model assumes a flat rest shape: a rigid motion of a flat rest stencil reads 0, while a curved
+/// rest stencil reads its own rest curvature (the kernel's C is not 0 there either). A stencil
+/// collapsed to one point reads 0.
 void constraint_residuals(const ParticleArrays& particles, const IsometricBendingConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out);
 

@@ -98,23 +98,24 @@ void solve_particle_tet_contact_velocities(ParticleArrays velocities,
 
 /// The batched kernel (project_particle_tet_contacts).
 inline void project_constraints(ParticleArrays particles, ParticleTetContacts& batch,
-                                std::size_t begin, std::size_t end, const ProjectionSettings&) {
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings&) {
   project_particle_tet_contacts(particles, batch, begin, end);
 }
 
-/// Sequential reference (sequential_projection.hpp). Particle–tet contacts, position solve only (friction stays with
-/// solve_particle_tet_contact_velocities): PositionBasedDynamics::
-/// solve_ParticleTetContactConstraint with the barycentric coordinates and a constraintInfo
-/// rebuilt from the batch (col 0 normal, col 1 tangent, (0,2) effective_mass,
-/// (1,2) max_tangential_impulse, (2,2) normal_speed), accumulating the batch's lambda. The
-/// contact's multiplier rule is its own (clamped at 0): settings are not used.
+/// Sequential reference (sequential_projection.hpp). Particle–tet contacts, position solve only
+/// (friction stays with solve_particle_tet_contact_velocities): PositionBasedDynamics::
+/// solve_ParticleTetContactConstraint with the barycentric coordinates and a constraintInfo rebuilt
+/// from the batch (col 0 normal, col 1 tangent, (0,2) effective_mass, (1,2) max_tangential_impulse,
+/// (2,2) normal_speed), accumulating the batch's lambda. The contact's multiplier rule is its own
+/// (clamped at 0): settings are not used.
 void project_sequentially(ParticleArrays particles, ParticleTetContacts& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings = {});
 
-/// Residual (constraint_residual.hpp). Particle–tet contact: the penetration depth max(0, −C) in length units, C = n · (p0 −
-/// Σ b_i x_i) the kernel's signed distance of the particle above the contact plane (stored
-/// normal n and barycentric b). 0 while the particle is on the outer side.
+/// Residual (constraint_residual.hpp). Particle–tet contact: the penetration depth max(0, −C) in
+/// length units, C = n · (p0 − Σ b_i x_i) the kernel's signed distance of the particle above the
+/// contact plane (stored normal n and barycentric b). 0 while the particle is on the outer side.
 void constraint_residuals(const ParticleArrays& particles, const ParticleTetContacts& batch,
                           std::size_t begin, std::size_t end, Real* out);
 

@@ -8,13 +8,13 @@
 // Unlike the batched kernels (project_<family>_constraints), the constraints of a range may
 // share particles freely: no colouring is needed.
 //
-// Every family has one overload, declared with the family (<family>_constraints.hpp, where
-// its comment names the scalar-API function and arguments it maps to). Every overload reads the batch's stored rest data and parameters exactly as the family's
-// batched kernel interprets them, so on constraints that share no movable particle it gives
-// the batched kernel's result up to rounding (the two evaluate the same formula, with
-// different instruction sequences). Particles with inverse mass 0 are never written.
-// Each overload checks the range and the particle count once (check_projection_range) and
-// throws InvalidInput when they are wrong.
+// Every family has one overload, declared with the family (<family>_constraints.hpp, where its
+// comment names the scalar-API function and arguments it maps to). Every overload reads the batch's
+// stored rest data and parameters exactly as the family's batched kernel interprets them, so on
+// constraints that share no movable particle it gives the batched kernel's result up to rounding
+// (the two evaluate the same formula, with different instruction sequences). Particles with inverse
+// mass 0 are never written. Each overload checks the range and the particle count once
+// (check_projection_range) and throws InvalidInput when they are wrong.
 #pragma once
 
 #include <tessera/core/constraint_families.hpp>

@@ -71,21 +71,23 @@ void project_strain_tetra_constraints(ParticleArrays particles,
 
 /// The batched kernel (project_strain_tetra_constraints).
 inline void project_constraints(ParticleArrays particles, StrainTetraConstraints& batch,
-                                std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
   project_strain_tetra_constraints(particles, batch, begin, end, settings);
 }
 
-/// Sequential reference (sequential_projection.hpp). Strain tetrahedron: PositionBasedDynamics::solve_StrainTetraConstraint with
-/// (invRestMat from rest_inverse, stretch_stiffness[0..2], shear_stiffness[0..2] = xy, xz, yz,
-/// normalize_stretch, normalize_shear). No XPBD form: the PBD form under either semantics.
+/// Sequential reference (sequential_projection.hpp). Strain tetrahedron:
+/// PositionBasedDynamics::solve_StrainTetraConstraint with (invRestMat from rest_inverse,
+/// stretch_stiffness[0..2], shear_stiffness[0..2] = xy, xz, yz, normalize_stretch,
+/// normalize_shear). No XPBD form: the PBD form under either semantics.
 void project_sequentially(ParticleArrays particles, const StrainTetraConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings);
 
-/// Residual (constraint_residual.hpp). Strain tetrahedron: ‖E‖_F of the 3×3 Green strain E = ½ (FᵀF − I), F = [p1 − p0,
-/// p2 − p0, p3 − p0] · invRestMat (p0 the reference vertex). Dimensionless; 0 at any rigid
-/// motion of the rest shape (also of a mirrored one: Green strain does not see inversion).
-/// A tetrahedron collapsed to one point reads √3 / 2.
+/// Residual (constraint_residual.hpp). Strain tetrahedron: ‖E‖_F of the 3×3 Green strain E = ½ (FᵀF
+/// − I), F = [p1 − p0, p2 − p0, p3 − p0] · invRestMat (p0 the reference vertex). Dimensionless; 0
+/// at any rigid motion of the rest shape (also of a mirrored one: Green strain does not see
+/// inversion). A tetrahedron collapsed to one point reads √3 / 2.
 void constraint_residuals(const ParticleArrays& particles, const StrainTetraConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out);
 

@@ -76,22 +76,24 @@ void project_strain_triangle_constraints(ParticleArrays particles,
 
 /// The batched kernel (project_strain_triangle_constraints).
 inline void project_constraints(ParticleArrays particles, StrainTriangleConstraints& batch,
-                                std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
   project_strain_triangle_constraints(particles, batch, begin, end, settings);
 }
 
-/// Sequential reference (sequential_projection.hpp). Strain triangle: PositionBasedDynamics::solve_StrainTriangleConstraint with
-/// (invRestMat from rest_inverse, xx/yy/xy_stiffness, normalize_stretch, normalize_shear).
-/// No XPBD form: the PBD form under either semantics (settings are not used).
+/// Sequential reference (sequential_projection.hpp). Strain triangle:
+/// PositionBasedDynamics::solve_StrainTriangleConstraint with (invRestMat from rest_inverse,
+/// xx/yy/xy_stiffness, normalize_stretch, normalize_shear). No XPBD form: the PBD form under either
+/// semantics (settings are not used).
 void project_sequentially(ParticleArrays particles, const StrainTriangleConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings);
 
-/// Residual (constraint_residual.hpp). Strain triangle: ‖E‖_F, the Frobenius norm of the 2×2 Green strain E = ½ (FᵀF − I) with
-/// F = [p1 − p0, p2 − p0] · invRestMat (3×2, p0 the reference vertex, as in the kernel).
-/// Dimensionless; 0 for a rigid motion of the rest triangle. Note the family's convention:
-/// the rest triangle is taken in the xy plane (init_StrainTriangleConstraint), so the rest
-/// positions a batch was built from read 0 only when they lie in that plane. A triangle
+/// Residual (constraint_residual.hpp). Strain triangle: ‖E‖_F, the Frobenius norm of the 2×2 Green
+/// strain E = ½ (FᵀF − I) with F = [p1 − p0, p2 − p0] · invRestMat (3×2, p0 the reference vertex,
+/// as in the kernel). Dimensionless; 0 for a rigid motion of the rest triangle. Note the family's
+/// convention: the rest triangle is taken in the xy plane (init_StrainTriangleConstraint), so the
+/// rest positions a batch was built from read 0 only when they lie in that plane. A triangle
 /// collapsed to one point reads √2 / 2.
 void constraint_residuals(const ParticleArrays& particles, const StrainTriangleConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out);

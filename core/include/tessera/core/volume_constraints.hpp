@@ -69,21 +69,23 @@ void project_volume_constraints(ParticleArrays particles, VolumeConstraints& con
 
 /// The batched kernel (project_volume_constraints).
 inline void project_constraints(ParticleArrays particles, VolumeConstraints& batch,
-                                std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+                                std::size_t begin, std::size_t end,
+                                const ProjectionSettings& settings) {
   project_volume_constraints(particles, batch, begin, end, settings);
 }
 
-/// Sequential reference (sequential_projection.hpp). Volume: PositionBasedDynamics::solve_VolumeConstraint with (rest_volume, stiffness), or
+/// Sequential reference (sequential_projection.hpp). Volume:
+/// PositionBasedDynamics::solve_VolumeConstraint with (rest_volume, stiffness), or
 /// XPBD::solve_VolumeConstraint with (rest_volume, compliance, settings.dt, lambda).
 void project_sequentially(ParticleArrays particles, VolumeConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings);
 
-/// Residual (constraint_residual.hpp). Volume: relative volume change |V − V0| / |V0| (dimensionless), V the signed volume
-/// (1/6) ((p1 − p0) × (p2 − p0)) · (p3 − p0) with p0 the reference vertex, as in the
-/// kernel; an inverted tetrahedron counts its full signed change (inverting a unit tet reads
-/// 2). A flat or collapsed tetrahedron reads 1. (A zero V0, which the builder rejects,
-/// would read |V|.)
+/// Residual (constraint_residual.hpp). Volume: relative volume change |V − V0| / |V0|
+/// (dimensionless), V the signed volume (1/6) ((p1 − p0) × (p2 − p0)) · (p3 − p0) with p0 the
+/// reference vertex, as in the kernel; an inverted tetrahedron counts its full signed change
+/// (inverting a unit tet reads 2). A flat or collapsed tetrahedron reads 1. (A zero V0, which the
+/// builder rejects, would read |V|.)
 void constraint_residuals(const ParticleArrays& particles, const VolumeConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out);
 

@@ -35,7 +35,7 @@ struct Residual {
   }
 };
 
-/// "rms 1.2e-3, max 4.5e-2 (distance rms ..., max ...; dihedral ...)" for logs and tools.
+/// "rms 1.2e-3, max 4.5e-2 (per family: <name> rms ..., max ...; ...)" for logs and tools.
 std::string format_residual(const Residual& residual);
 
 }  // namespace tessera

@@ -96,25 +96,9 @@ void constraint_residuals(const ParticleArrays& particles, const DistanceConstra
 void project_sequentially(ParticleArrays particles, DistanceConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings) {
-  check_projection_range(DistanceConstraints::kFamily, begin, end, batch.size(),
-                         batch.particles.particle_count, particles);
-  if (detail::uses_compliance(settings)) {
-    detail::project_in_order<2>(particles, batch.particles, begin, end,
-                        [&](std::size_t c, const detail::ConstraintStencil<2>& s, Vector3r(&corr)[2]) {
-                          XPBD::solve_DistanceConstraint(
-                              s.position[0], s.inverse_mass[0], s.position[1],
-                              s.inverse_mass[1], batch.rest_length[c], batch.compliance[c],
-                              settings.dt, batch.lambda[c], corr[0], corr[1]);
-                        });
-  } else {
-    detail::project_in_order<2>(particles, batch.particles, begin, end,
-                        [&](std::size_t c, const detail::ConstraintStencil<2>& s, Vector3r(&corr)[2]) {
-                          PositionBasedDynamics::solve_DistanceConstraint(
-                              s.position[0], s.inverse_mass[0], s.position[1],
-                              s.inverse_mass[1], batch.rest_length[c], batch.stiffness[c],
-                              corr[0], corr[1]);
-                        });
-  }
+  detail::project_stiffness_or_compliance(
+      particles, batch, begin, end, settings, PositionBasedDynamics::solve_DistanceConstraint,
+      XPBD::solve_DistanceConstraint, [&](std::size_t c) { return batch.rest_length[c]; });
 }
 
 }  // namespace tessera

@@ -78,7 +78,7 @@ void ProjectFEMTetraConstraints(ParticleArrays particles, FEMTetraConstraints& c
 
 void FEMTetraResiduals(const ParticleArrays& particles, const FEMTetraConstraints& batch,
                        std::size_t begin, std::size_t end, Real* out) {
-  tetra_strain_residuals(particles, batch, begin, end, out);
+  green_strain_residuals<4>(particles, batch, begin, end, out);
 }
 
 }  // namespace HWY_NAMESPACE
@@ -149,31 +149,18 @@ void constraint_residuals(const ParticleArrays& particles, const FEMTetraConstra
 void project_sequentially(ParticleArrays particles, FEMTetraConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings) {
-  check_projection_range(FEMTetraConstraints::kFamily, begin, end, batch.size(),
-                         batch.particles.particle_count, particles);
-  if (detail::uses_compliance(settings)) {
-    detail::project_in_order<4>(
-        particles, batch.particles, begin, end,
-        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
-          XPBD::solve_FEMTetraConstraint(
-              s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
-              s.inverse_mass[2], s.position[3], s.inverse_mass[3], batch.volume[c],
-              detail::rest_inverse_of<3>(batch.rest_inverse, c), batch.poisson_ratio[c],
-              batch.compliance[c], batch.handle_inversion, settings.dt, batch.lambda[c],
-              corr[0], corr[1], corr[2], corr[3]);
-        });
-  } else {
-    detail::project_in_order<4>(
-        particles, batch.particles, begin, end,
-        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
-          PositionBasedDynamics::solve_FEMTetraConstraint(
-              s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
-              s.inverse_mass[2], s.position[3], s.inverse_mass[3], batch.volume[c],
-              detail::rest_inverse_of<3>(batch.rest_inverse, c), batch.youngs_modulus[c],
-              batch.poisson_ratio[c], batch.handle_inversion, corr[0], corr[1], corr[2],
-              corr[3]);
-        });
-  }
+  detail::project_batch_in_order(
+      particles, batch, begin, end, [&](std::size_t c, const auto& s, auto& corr) {
+    const auto rest_inverse = detail::rest_inverse_of<3>(batch.rest_inverse, c);
+    if (detail::uses_compliance(settings))
+      detail::call_scalar_api(XPBD::solve_FEMTetraConstraint, s, corr, batch.volume[c], rest_inverse,
+                              batch.poisson_ratio[c], batch.compliance[c], batch.handle_inversion,
+                              settings.dt, batch.lambda[c]);
+    else
+      detail::call_scalar_api(PositionBasedDynamics::solve_FEMTetraConstraint, s, corr, batch.volume[c], rest_inverse,
+                              batch.youngs_modulus[c], batch.poisson_ratio[c],
+                              batch.handle_inversion);
+  });
 }
 
 }  // namespace tessera

@@ -48,7 +48,7 @@ void ProjectFEMTriangleConstraints(ParticleArrays particles,
 
 void FEMTriangleResiduals(const ParticleArrays& particles, const FEMTriangleConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out) {
-  triangle_strain_residuals(particles, batch, begin, end, out);
+  green_strain_residuals<3>(particles, batch, begin, end, out);
 }
 
 }  // namespace HWY_NAMESPACE
@@ -128,18 +128,14 @@ void constraint_residuals(const ParticleArrays& particles, const FEMTriangleCons
 void project_sequentially(ParticleArrays particles, const FEMTriangleConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& /*settings: PBD form only*/) {
-  check_projection_range(FEMTriangleConstraints::kFamily, begin, end, batch.size(),
-                         batch.particles.particle_count, particles);
-  detail::project_in_order<3>(particles, batch.particles, begin, end,
-                      [&](std::size_t c, const detail::ConstraintStencil<3>& s, Vector3r(&corr)[3]) {
-                        PositionBasedDynamics::solve_FEMTriangleConstraint(
-                            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1],
-                            s.position[2], s.inverse_mass[2], batch.area[c],
-                            detail::rest_inverse_of<2>(batch.rest_inverse, c), batch.youngs_modulus_x[c],
-                            batch.youngs_modulus_y[c], batch.youngs_modulus_shear[c],
-                            batch.poisson_ratio_xy[c], batch.poisson_ratio_yx[c], corr[0],
-                            corr[1], corr[2]);
-                      });
+  detail::project_batch_in_order(
+      particles, batch, begin, end, [&](std::size_t c, const auto& s, auto& corr) {
+    detail::call_scalar_api(PositionBasedDynamics::solve_FEMTriangleConstraint, s, corr, batch.area[c],
+                            detail::rest_inverse_of<2>(batch.rest_inverse, c),
+                            batch.youngs_modulus_x[c], batch.youngs_modulus_y[c],
+                            batch.youngs_modulus_shear[c], batch.poisson_ratio_xy[c],
+                            batch.poisson_ratio_yx[c]);
+  });
 }
 
 }  // namespace tessera

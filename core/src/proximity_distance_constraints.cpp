@@ -214,14 +214,11 @@ void project_sequentially(ParticleArrays particles, const EdgePointDistanceConst
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings) {
   detail::check_proximity_call(particles, batch, begin, end, settings);
-  detail::project_in_order<3>(particles, batch.particles, begin, end,
-                      [&](std::size_t c, const detail::ConstraintStencil<3>& s, Vector3r(&corr)[3]) {
-                        PositionBasedDynamics::solve_EdgePointDistanceConstraint(
-                            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1],
-                            s.position[2], s.inverse_mass[2], batch.rest_distance[c],
-                            batch.compression_stiffness[c], batch.stretch_stiffness[c],
-                            corr[0], corr[1], corr[2]);
-                      });
+  detail::project_batch_in_order(
+      particles, batch, begin, end, [&](std::size_t c, const auto& s, auto& corr) {
+    detail::call_scalar_api(PositionBasedDynamics::solve_EdgePointDistanceConstraint, s, corr, batch.rest_distance[c],
+                            batch.compression_stiffness[c], batch.stretch_stiffness[c]);
+  });
 }
 
 void constraint_residuals(const ParticleArrays& particles,
@@ -234,14 +231,11 @@ void project_sequentially(ParticleArrays particles,
                           const TrianglePointDistanceConstraints& batch, std::size_t begin,
                           std::size_t end, const ProjectionSettings& settings) {
   detail::check_proximity_call(particles, batch, begin, end, settings);
-  detail::project_in_order<4>(particles, batch.particles, begin, end,
-                      [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
-                        PositionBasedDynamics::solve_TrianglePointDistanceConstraint(
-                            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1],
-                            s.position[2], s.inverse_mass[2], s.position[3], s.inverse_mass[3],
-                            batch.rest_distance[c], batch.compression_stiffness[c],
-                            batch.stretch_stiffness[c], corr[0], corr[1], corr[2], corr[3]);
-                      });
+  detail::project_batch_in_order(
+      particles, batch, begin, end, [&](std::size_t c, const auto& s, auto& corr) {
+    detail::call_scalar_api(PositionBasedDynamics::solve_TrianglePointDistanceConstraint, s, corr, batch.rest_distance[c],
+                            batch.compression_stiffness[c], batch.stretch_stiffness[c]);
+  });
 }
 
 void constraint_residuals(const ParticleArrays& particles,
@@ -254,14 +248,11 @@ void project_sequentially(ParticleArrays particles, const EdgeEdgeDistanceConstr
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings) {
   detail::check_proximity_call(particles, batch, begin, end, settings);
-  detail::project_in_order<4>(particles, batch.particles, begin, end,
-                      [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
-                        PositionBasedDynamics::solve_EdgeEdgeDistanceConstraint(
-                            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1],
-                            s.position[2], s.inverse_mass[2], s.position[3], s.inverse_mass[3],
-                            batch.rest_distance[c], batch.compression_stiffness[c],
-                            batch.stretch_stiffness[c], corr[0], corr[1], corr[2], corr[3]);
-                      });
+  detail::project_batch_in_order(
+      particles, batch, begin, end, [&](std::size_t c, const auto& s, auto& corr) {
+    detail::call_scalar_api(PositionBasedDynamics::solve_EdgeEdgeDistanceConstraint, s, corr, batch.rest_distance[c],
+                            batch.compression_stiffness[c], batch.stretch_stiffness[c]);
+  });
 }
 
 }  // namespace tessera

@@ -9,6 +9,8 @@
 #include <array>
 #include <cstddef>
 #include <string>
+#include <tuple>
+#include <utility>
 
 #include <tessera/core/constraint_batch.hpp>
 #include <tessera/core/error.hpp>
@@ -64,8 +66,47 @@ void project_in_order(const ParticleArrays& particles, const ConstraintParticles
   }
 }
 
+/// The same over a fixed-arity batch, after its range and particle checks.
+template <class Batch, class Solve>
+void project_batch_in_order(const ParticleArrays& particles, const Batch& batch,
+                            std::size_t begin, std::size_t end, Solve&& solve) {
+  check_projection_range(Batch::kFamily, begin, end, batch.size(),
+                         batch.particles.particle_count, particles);
+  project_in_order<Batch::kTraits.arity>(particles, batch.particles, begin, end, solve);
+}
+
+/// Calls a scalar-API function in the seed's argument order: solve(p0, w0, ..., p(N-1),
+/// w(N-1), parameters..., corr[0], ..., corr[N-1]).
+template <int N, class Function, class... Parameters>
+void call_scalar_api(Function&& solve, const ConstraintStencil<N>& s, Vector3r (&corr)[N],
+                     Parameters&&... parameters) {
+  [&]<std::size_t... K>(std::index_sequence<K...>) {
+    std::apply(solve, std::tuple_cat(std::tie(s.position[K], s.inverse_mass[K])...,
+                                     std::forward_as_tuple(parameters...),
+                                     std::tie(corr[K])...));
+  }(std::make_index_sequence<std::size_t(N)>());
+}
+
 inline bool uses_compliance(const ProjectionSettings& settings) {
   return settings.semantics == ConstraintSemantics::compliance;
+}
+
+/// The mapping of a family whose scalar API is solve(particles, rest, stiffness, corr) in PBD
+/// and solve(particles, rest, compliance, dt, λ, corr) in XPBD: rest(c) is constraint c's rest
+/// value, stiffness, compliance and λ its arrays of those names.
+template <class Batch, class Pbd, class Xpbd, class Rest>
+void project_stiffness_or_compliance(const ParticleArrays& particles, Batch& batch,
+                                     std::size_t begin, std::size_t end,
+                                     const ProjectionSettings& settings, Pbd&& pbd, Xpbd&& xpbd,
+                                     Rest&& rest) {
+  project_batch_in_order(particles, batch, begin, end,
+                         [&](std::size_t c, const auto& s, auto& corr) {
+                           if (uses_compliance(settings))
+                             call_scalar_api(xpbd, s, corr, rest(c), batch.compliance[c],
+                                             settings.dt, batch.lambda[c]);
+                           else
+                             call_scalar_api(pbd, s, corr, rest(c), batch.stiffness[c]);
+                         });
 }
 
 /// invRestMat(k, j) from rest_inverse[Dim k + j] (the layout of the strain and FEM batches).

@@ -67,7 +67,7 @@ void ProjectStrainTetraConstraints(ParticleArrays particles,
 
 void StrainTetraResiduals(const ParticleArrays& particles, const StrainTetraConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out) {
-  tetra_strain_residuals(particles, batch, begin, end, out);
+  green_strain_residuals<4>(particles, batch, begin, end, out);
 }
 
 }  // namespace HWY_NAMESPACE
@@ -136,21 +136,16 @@ void constraint_residuals(const ParticleArrays& particles, const StrainTetraCons
 void project_sequentially(ParticleArrays particles, const StrainTetraConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& /*settings: PBD form only*/) {
-  check_projection_range(StrainTetraConstraints::kFamily, begin, end, batch.size(),
-                         batch.particles.particle_count, particles);
-  detail::project_in_order<4>(
-      particles, batch.particles, begin, end,
-      [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
-        const Vector3r stretch(batch.stretch_stiffness[0][c], batch.stretch_stiffness[1][c],
-                               batch.stretch_stiffness[2][c]);
-        const Vector3r shear(batch.shear_stiffness[0][c], batch.shear_stiffness[1][c],
-                             batch.shear_stiffness[2][c]);
-        PositionBasedDynamics::solve_StrainTetraConstraint(
-            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
-            s.inverse_mass[2], s.position[3], s.inverse_mass[3],
-            detail::rest_inverse_of<3>(batch.rest_inverse, c), stretch, shear, batch.normalize_stretch,
-            batch.normalize_shear, corr[0], corr[1], corr[2], corr[3]);
-      });
+  detail::project_batch_in_order(
+      particles, batch, begin, end, [&](std::size_t c, const auto& s, auto& corr) {
+    const auto stiffness = [&](const std::array<AlignedVector<Real>, 3>& k) {
+      return Vector3r(k[0][c], k[1][c], k[2][c]);
+    };
+    detail::call_scalar_api(PositionBasedDynamics::solve_StrainTetraConstraint, s, corr,
+                            detail::rest_inverse_of<3>(batch.rest_inverse, c),
+                            stiffness(batch.stretch_stiffness), stiffness(batch.shear_stiffness),
+                            batch.normalize_stretch, batch.normalize_shear);
+  });
 }
 
 }  // namespace tessera

@@ -66,7 +66,7 @@ void ProjectStrainTriangleConstraints(ParticleArrays particles,
 void StrainTriangleResiduals(const ParticleArrays& particles,
                              const StrainTriangleConstraints& batch, std::size_t begin,
                              std::size_t end, Real* out) {
-  triangle_strain_residuals(particles, batch, begin, end, out);
+  green_strain_residuals<3>(particles, batch, begin, end, out);
 }
 
 }  // namespace HWY_NAMESPACE
@@ -130,18 +130,13 @@ void constraint_residuals(const ParticleArrays& particles,
 void project_sequentially(ParticleArrays particles, const StrainTriangleConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& /*settings: PBD form only*/) {
-  check_projection_range(StrainTriangleConstraints::kFamily, begin, end, batch.size(),
-                         batch.particles.particle_count, particles);
-  detail::project_in_order<3>(particles, batch.particles, begin, end,
-                      [&](std::size_t c, const detail::ConstraintStencil<3>& s, Vector3r(&corr)[3]) {
-                        PositionBasedDynamics::solve_StrainTriangleConstraint(
-                            s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1],
-                            s.position[2], s.inverse_mass[2],
+  detail::project_batch_in_order(
+      particles, batch, begin, end, [&](std::size_t c, const auto& s, auto& corr) {
+    detail::call_scalar_api(PositionBasedDynamics::solve_StrainTriangleConstraint, s, corr,
                             detail::rest_inverse_of<2>(batch.rest_inverse, c), batch.xx_stiffness[c],
-                            batch.yy_stiffness[c], batch.xy_stiffness[c],
-                            batch.normalize_stretch, batch.normalize_shear, corr[0], corr[1],
-                            corr[2]);
-                      });
+                            batch.yy_stiffness[c], batch.xy_stiffness[c], batch.normalize_stretch,
+                            batch.normalize_shear);
+  });
 }
 
 }  // namespace tessera

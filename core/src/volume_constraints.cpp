@@ -112,28 +112,9 @@ void constraint_residuals(const ParticleArrays& particles, const VolumeConstrain
 void project_sequentially(ParticleArrays particles, VolumeConstraints& batch,
                           std::size_t begin, std::size_t end,
                           const ProjectionSettings& settings) {
-  check_projection_range(VolumeConstraints::kFamily, begin, end, batch.size(),
-                         batch.particles.particle_count, particles);
-  if (detail::uses_compliance(settings)) {
-    detail::project_in_order<4>(
-        particles, batch.particles, begin, end,
-        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
-          XPBD::solve_VolumeConstraint(
-              s.position[0], s.inverse_mass[0], s.position[1], s.inverse_mass[1], s.position[2],
-              s.inverse_mass[2], s.position[3], s.inverse_mass[3], batch.rest_volume[c],
-              batch.compliance[c], settings.dt, batch.lambda[c], corr[0], corr[1], corr[2],
-              corr[3]);
-        });
-  } else {
-    detail::project_in_order<4>(
-        particles, batch.particles, begin, end,
-        [&](std::size_t c, const detail::ConstraintStencil<4>& s, Vector3r(&corr)[4]) {
-          PositionBasedDynamics::solve_VolumeConstraint(s.position[0], s.inverse_mass[0], s.position[1],
-                                      s.inverse_mass[1], s.position[2], s.inverse_mass[2],
-                                      s.position[3], s.inverse_mass[3], batch.rest_volume[c],
-                                      batch.stiffness[c], corr[0], corr[1], corr[2], corr[3]);
-        });
-  }
+  detail::project_stiffness_or_compliance(
+      particles, batch, begin, end, settings, PositionBasedDynamics::solve_VolumeConstraint,
+      XPBD::solve_VolumeConstraint, [&](std::size_t c) { return batch.rest_volume[c]; });
 }
 
 }  // namespace tessera

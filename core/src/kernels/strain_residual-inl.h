@@ -77,27 +77,19 @@ HWY_INLINE void tetra_strain_lanes(const ParticleArrays& particles, const Batch&
                     });
 }
 
-/// out[c − begin] = ‖E‖_F of triangles [begin, end) of a strain or FEM triangle batch.
-template <class Batch>
-HWY_INLINE void triangle_strain_residuals(const ParticleArrays& particles, const Batch& batch,
-                                          std::size_t begin, std::size_t end, Real* out) {
-  residual_lanes<3>(particles, batch.particles, begin, end, out,
-                    [&](const Vec3<RealLanes> (&p)[3], std::size_t i) {
-                      RealLanes m[2][2];
-                      rest_inverse_of<2>(batch.rest_inverse, i, m);
-                      return triangle_green_strain_norm(p, m);
-                    });
-}
-
-/// The same for tetrahedra of a strain or FEM tetrahedron batch.
-template <class Batch>
-HWY_INLINE void tetra_strain_residuals(const ParticleArrays& particles, const Batch& batch,
+/// out[c − begin] = ‖E‖_F of constraints [begin, end) of a strain or FEM batch of triangles
+/// (N = 3) or tetrahedra (N = 4).
+template <int N, class Batch>
+HWY_INLINE void green_strain_residuals(const ParticleArrays& particles, const Batch& batch,
                                        std::size_t begin, std::size_t end, Real* out) {
-  residual_lanes<4>(particles, batch.particles, begin, end, out,
-                    [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
-                      RealLanes m[3][3];
-                      rest_inverse_of<3>(batch.rest_inverse, i, m);
-                      return tetra_green_strain_norm(p, m);
+  residual_lanes<N>(particles, batch.particles, begin, end, out,
+                    [&](const Vec3<RealLanes> (&p)[N], std::size_t i) {
+                      RealLanes m[N - 1][N - 1];
+                      rest_inverse_of<N - 1>(batch.rest_inverse, i, m);
+                      if constexpr (N == 3)
+                        return triangle_green_strain_norm(p, m);
+                      else
+                        return tetra_green_strain_norm(p, m);
                     });
 }
 

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 
 #include <tessera/core/error.hpp>
 
@@ -86,5 +87,44 @@ inline void check_projection_range(const char* family, std::size_t begin, std::s
                        std::to_string(particle_count) + " particles, projected on " +
                        std::to_string(particles.count));
 }
+
+namespace detail {
+
+/// How project_sequentially takes a batch: by reference where it accumulates a multiplier,
+/// by const reference otherwise.
+template <class Batch>
+using SequentialBatch =
+    std::conditional_t<Batch::kTraits.multiplier, Batch&, const Batch&>;
+
+/// The family's batched kernel under the one signature generic code calls (a kernel that
+/// needs no settings is called without them).
+template <class Kernel, class Batch>
+void call_batched_kernel(Kernel&& kernel, ParticleArrays particles, Batch& batch,
+                         std::size_t begin, std::size_t end, const ProjectionSettings& settings) {
+  if constexpr (std::is_invocable_v<Kernel, ParticleArrays, Batch&, std::size_t, std::size_t,
+                                    const ProjectionSettings&>)
+    kernel(particles, batch, begin, end, settings);
+  else
+    kernel(particles, batch, begin, end);
+}
+
+}  // namespace detail
+
+/// Declares a family's entry points under the names generic code calls, overloaded on the
+/// batch type (constraint_families.hpp): project_constraints (the batched kernel),
+/// project_sequentially (the scalar API one constraint after another, defined in the family's
+/// .cpp; sequential_projection.hpp) and constraint_residuals (the batched residual, defined
+/// there too; constraint_residual.hpp). The family's header says, above it, which scalar-API
+/// function and arguments the sequential form maps to and what its residual measures.
+#define TESSERA_FAMILY_ENTRY_POINTS(Batch, batched_kernel)                                  \
+  inline void project_constraints(ParticleArrays particles, Batch& batch, std::size_t begin, \
+                                  std::size_t end, const ProjectionSettings& settings) {     \
+    detail::call_batched_kernel(batched_kernel, particles, batch, begin, end, settings);     \
+  }                                                                                          \
+  void project_sequentially(ParticleArrays particles, detail::SequentialBatch<Batch> batch,  \
+                            std::size_t begin, std::size_t end,                              \
+                            const ProjectionSettings& settings = {});                        \
+  void constraint_residuals(const ParticleArrays& particles, const Batch& batch,             \
+                            std::size_t begin, std::size_t end, Real* out);
 
 }  // namespace tessera

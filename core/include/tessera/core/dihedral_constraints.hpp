@@ -28,6 +28,15 @@ struct DihedralConstraints {
   static constexpr FamilyTraits kTraits = {
       .arity = 4, .xpbd = true, .multiplier = true, .velocity_pass = false,
       .cell = CellShape::hinge};
+  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
+  template <class Self>
+  static auto per_constraint_arrays(Self& b) {
+    return std::tie(b.rest_angle, b.stiffness, b.compliance, b.lambda);
+  }
+  template <class Self>
+  static auto batch_wide_fields(Self&) {
+    return std::tie();
+  }
   ConstraintParticles<4> particles;
   /// φ0 ∈ [0, π], the angle between the rest normals (0 for a flat rest stencil).
   AlignedVector<Real> rest_angle;
@@ -37,15 +46,6 @@ struct DihedralConstraints {
   AlignedVector<Real> lambda;
 
   std::size_t size() const { return particles.count; }
-  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
-  template <class Self>
-  static auto per_constraint_arrays(Self& b) {
-    return std::tie(b.rest_angle, b.stiffness, b.compliance, b.lambda);
-  }
-  template <class Self>
-  static auto batch_wide_fields([[maybe_unused]] Self& b) {
-    return std::tie();
-  }
 };
 
 /// Validates and builds the batch. Throws InvalidInput naming the constraint for: an index out
@@ -65,27 +65,12 @@ void project_dihedral_constraints(ParticleArrays particles, DihedralConstraints&
                                   const ProjectionSettings& settings);
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
-
-/// The batched kernel (project_dihedral_constraints).
-inline void project_constraints(ParticleArrays particles, DihedralConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_dihedral_constraints(particles, batch, begin, end, settings);
-}
-
-/// Sequential reference (sequential_projection.hpp). Dihedral:
-/// PositionBasedDynamics::solve_DihedralConstraint with (rest_angle, stiffness), or
-/// XPBD::solve_DihedralConstraint with (rest_angle, compliance, settings.dt, lambda).
-void project_sequentially(ParticleArrays particles, DihedralConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings);
-
-/// Residual (constraint_residual.hpp). Dihedral: |φ − φ0| in radians, φ ∈ [0, π] the angle between
-/// the wing normals exactly as the dihedral formula computes it. A degenerate stencil (zero-length
-/// shared edge or a zero-area wing) has no defined angle; it reads the formula's value there, φ = 0
-/// for a stencil collapsed to one point (so the residual is φ0), always finite and ≤ π.
-void constraint_residuals(const ParticleArrays& particles, const DihedralConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, Dihedral: PositionBasedDynamics::solve_DihedralConstraint with (rest_angle,
+// stiffness), or XPBD::solve_DihedralConstraint with (rest_angle, compliance, settings.dt, lambda).
+// constraint_residuals, Dihedral: |φ − φ0| in radians, φ ∈ [0, π] the angle between the wing
+// normals exactly as the dihedral formula computes it. A degenerate stencil (zero-length shared
+// edge or a zero-area wing) has no defined angle; it reads the formula's value there, φ = 0 for a
+// stencil collapsed to one point (so the residual is φ0), always finite and ≤ π.
+TESSERA_FAMILY_ENTRY_POINTS(DihedralConstraints, project_dihedral_constraints)
 
 }  // namespace tessera

@@ -25,6 +25,15 @@ struct DistanceConstraints {
   static constexpr FamilyTraits kTraits = {
       .arity = 2, .xpbd = true, .multiplier = true, .velocity_pass = false,
       .cell = CellShape::segment};
+  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
+  template <class Self>
+  static auto per_constraint_arrays(Self& b) {
+    return std::tie(b.rest_length, b.stiffness, b.compliance, b.lambda);
+  }
+  template <class Self>
+  static auto batch_wide_fields(Self&) {
+    return std::tie();
+  }
   ConstraintParticles<2> particles;
   AlignedVector<Real> rest_length;
   AlignedVector<Real> stiffness;
@@ -33,15 +42,6 @@ struct DistanceConstraints {
   AlignedVector<Real> lambda;
 
   std::size_t size() const { return particles.count; }
-  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
-  template <class Self>
-  static auto per_constraint_arrays(Self& b) {
-    return std::tie(b.rest_length, b.stiffness, b.compliance, b.lambda);
-  }
-  template <class Self>
-  static auto batch_wide_fields([[maybe_unused]] Self& b) {
-    return std::tie();
-  }
 };
 
 /// Validates and builds the batch. Throws InvalidInput naming the constraint for: an index out
@@ -58,26 +58,11 @@ void project_distance_constraints(ParticleArrays particles, DistanceConstraints&
                                   const ProjectionSettings& settings);
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
-
-/// The batched kernel (project_distance_constraints).
-inline void project_constraints(ParticleArrays particles, DistanceConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_distance_constraints(particles, batch, begin, end, settings);
-}
-
-/// Sequential reference (sequential_projection.hpp). Distance: stiffness semantics →
-/// PositionBasedDynamics::solve_DistanceConstraint with (rest_length, stiffness); compliance
-/// semantics → XPBD::solve_DistanceConstraint with (rest_length, compliance, settings.dt, lambda).
-void project_sequentially(ParticleArrays particles, DistanceConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings);
-
-/// Residual (constraint_residual.hpp). Distance: relative stretch |‖p0 − p1‖ − l0| / l0
-/// (dimensionless). Coincident particles read 1. (A zero l0, which the builder rejects, would read
-/// |‖p0 − p1‖|.)
-void constraint_residuals(const ParticleArrays& particles, const DistanceConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, Distance: stiffness semantics →
+// PositionBasedDynamics::solve_DistanceConstraint with (rest_length, stiffness); compliance
+// semantics → XPBD::solve_DistanceConstraint with (rest_length, compliance, settings.dt, lambda).
+// constraint_residuals, Distance: relative stretch |‖p0 − p1‖ − l0| / l0 (dimensionless).
+// Coincident particles read 1. (A zero l0, which the builder rejects, would read |‖p0 − p1‖|.)
+TESSERA_FAMILY_ENTRY_POINTS(DistanceConstraints, project_distance_constraints)
 
 }  // namespace tessera

@@ -35,6 +35,16 @@ struct FEMTetraConstraints {
   static constexpr FamilyTraits kTraits = {
       .arity = 4, .xpbd = true, .multiplier = true, .velocity_pass = false,
       .cell = CellShape::tetrahedron};
+  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
+  template <class Self>
+  static auto per_constraint_arrays(Self& b) {
+    return std::tie(b.volume, b.rest_inverse, b.youngs_modulus, b.poisson_ratio, b.compliance,
+                    b.lambda);
+  }
+  template <class Self>
+  static auto batch_wide_fields(Self& b) {
+    return std::tie(b.handle_inversion);
+  }
   ConstraintParticles<4> particles;
   AlignedVector<Real> volume;
   /// invRestMat(k, j) of every constraint in rest_inverse[3k + j].
@@ -48,15 +58,6 @@ struct FEMTetraConstraints {
   bool handle_inversion = true;
 
   std::size_t size() const { return particles.count; }
-  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
-  template <class Self>
-  static auto per_constraint_arrays(Self& b) {
-    return std::tie(b.volume, b.rest_inverse, b.youngs_modulus, b.poisson_ratio, b.compliance, b.lambda);
-  }
-  template <class Self>
-  static auto batch_wide_fields([[maybe_unused]] Self& b) {
-    return std::tie(b.handle_inversion);
-  }
 };
 
 /// Validates and builds the batch. Throws InvalidInput naming the constraint for: an index out
@@ -74,28 +75,14 @@ void project_fem_tetra_constraints(ParticleArrays particles, FEMTetraConstraints
                                    const ProjectionSettings& settings);
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
-
-/// The batched kernel (project_fem_tetra_constraints).
-inline void project_constraints(ParticleArrays particles, FEMTetraConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_fem_tetra_constraints(particles, batch, begin, end, settings);
-}
-
-/// Sequential reference (sequential_projection.hpp). FEM tetrahedron:
-/// PositionBasedDynamics::solve_FEMTetraConstraint with (volume, invRestMat, youngs_modulus,
-/// poisson_ratio, handle_inversion), or XPBD::solve_FEMTetraConstraint with (volume, invRestMat,
-/// poisson_ratio, compliance, handle_inversion, settings.dt, lambda).
-void project_sequentially(ParticleArrays particles, FEMTetraConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings);
-
-/// Residual (constraint_residual.hpp). FEM tetrahedron: ‖E‖_F of the 3×3 Green strain E = ½ (FᵀF −
-/// I), F = [p1 − p0, p2 − p0, p3 − p0] · invRestMat (the kernel's F and ε; the plain strain even
-/// where the kernel's inversion handling evaluates a clamped one, so a mirrored element reads 0).
-/// Dimensionless and independent of the material; collapsed to one point: √3 / 2.
-void constraint_residuals(const ParticleArrays& particles, const FEMTetraConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, FEM tetrahedron: PositionBasedDynamics::solve_FEMTetraConstraint with
+// (volume, invRestMat, youngs_modulus, poisson_ratio, handle_inversion), or
+// XPBD::solve_FEMTetraConstraint with (volume, invRestMat, poisson_ratio, compliance,
+// handle_inversion, settings.dt, lambda).
+// constraint_residuals, FEM tetrahedron: ‖E‖_F of the 3×3 Green strain E = ½ (FᵀF − I), F = [p1 −
+// p0, p2 − p0, p3 − p0] · invRestMat (the kernel's F and ε; the plain strain even where the
+// kernel's inversion handling evaluates a clamped one, so a mirrored element reads 0).
+// Dimensionless and independent of the material; collapsed to one point: √3 / 2.
+TESSERA_FAMILY_ENTRY_POINTS(FEMTetraConstraints, project_fem_tetra_constraints)
 
 }  // namespace tessera

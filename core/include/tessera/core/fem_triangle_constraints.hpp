@@ -33,6 +33,16 @@ struct FEMTriangleConstraints {
   static constexpr FamilyTraits kTraits = {
       .arity = 3, .xpbd = false, .multiplier = false, .velocity_pass = false,
       .cell = CellShape::triangle};
+  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
+  template <class Self>
+  static auto per_constraint_arrays(Self& b) {
+    return std::tie(b.area, b.rest_inverse, b.youngs_modulus_x, b.youngs_modulus_y,
+                    b.youngs_modulus_shear, b.poisson_ratio_xy, b.poisson_ratio_yx);
+  }
+  template <class Self>
+  static auto batch_wide_fields(Self&) {
+    return std::tie();
+  }
   ConstraintParticles<3> particles;
   AlignedVector<Real> area;
   /// invRestMat(k, j) of every constraint in rest_inverse[2k + j].
@@ -44,15 +54,6 @@ struct FEMTriangleConstraints {
   AlignedVector<Real> poisson_ratio_yx;
 
   std::size_t size() const { return particles.count; }
-  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
-  template <class Self>
-  static auto per_constraint_arrays(Self& b) {
-    return std::tie(b.area, b.rest_inverse, b.youngs_modulus_x, b.youngs_modulus_y, b.youngs_modulus_shear, b.poisson_ratio_xy, b.poisson_ratio_yx);
-  }
-  template <class Self>
-  static auto batch_wide_fields([[maybe_unused]] Self& b) {
-    return std::tie();
-  }
 };
 
 /// Validates and builds the batch. Throws InvalidInput naming the constraint for: an index out
@@ -70,27 +71,12 @@ void project_fem_triangle_constraints(ParticleArrays particles,
                                       std::size_t end, const ProjectionSettings& settings);
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
-
-/// The batched kernel (project_fem_triangle_constraints).
-inline void project_constraints(ParticleArrays particles, FEMTriangleConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_fem_triangle_constraints(particles, batch, begin, end, settings);
-}
-
-/// Sequential reference (sequential_projection.hpp). FEM triangle:
-/// PositionBasedDynamics::solve_FEMTriangleConstraint with (area, invRestMat,
-/// youngs_modulus_x/y/shear, poisson_ratio_xy/yx). No XPBD form: the PBD form under either
-/// semantics.
-void project_sequentially(ParticleArrays particles, const FEMTriangleConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings);
-
-/// Residual (constraint_residual.hpp). FEM triangle: ‖E‖_F of the 2×2 Green strain E = ½ (FᵀF − I),
-/// F = [p1 − p0, p2 − p0] · invRestMat in the triangle's own rest frame (any orientation in space),
-/// as in the kernel. Dimensionless and independent of the material; collapsed to one point: √2 / 2.
-void constraint_residuals(const ParticleArrays& particles, const FEMTriangleConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, FEM triangle: PositionBasedDynamics::solve_FEMTriangleConstraint with
+// (area, invRestMat, youngs_modulus_x/y/shear, poisson_ratio_xy/yx). No XPBD form: the PBD form
+// under either semantics.
+// constraint_residuals, FEM triangle: ‖E‖_F of the 2×2 Green strain E = ½ (FᵀF − I), F = [p1 − p0,
+// p2 − p0] · invRestMat in the triangle's own rest frame (any orientation in space), as in the
+// kernel. Dimensionless and independent of the material; collapsed to one point: √2 / 2.
+TESSERA_FAMILY_ENTRY_POINTS(FEMTriangleConstraints, project_fem_triangle_constraints)
 
 }  // namespace tessera

@@ -31,6 +31,17 @@ struct IsometricBendingConstraints {
   static constexpr FamilyTraits kTraits = {
       .arity = 4, .xpbd = true, .multiplier = true, .velocity_pass = false,
       .cell = CellShape::hinge};
+  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
+  template <class Self>
+  static auto per_constraint_arrays(Self& b) {
+    return std::tie(b.factor, b.stiffness, b.compliance, b.lambda);
+  }
+  template <class Self>
+  static auto batch_wide_fields(Self&) {
+    return std::tie();
+  }
+  /// Q = k kᵀ of constraint c.
+  Matrix4r matrix(std::size_t c) const;
 
   ConstraintParticles<4> particles;
   /// The rank-one factor of each Q = k kᵀ: factor[j][c] is k_j of constraint c.
@@ -41,17 +52,6 @@ struct IsometricBendingConstraints {
   AlignedVector<Real> lambda;
 
   std::size_t size() const { return particles.count; }
-  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
-  template <class Self>
-  static auto per_constraint_arrays(Self& b) {
-    return std::tie(b.factor, b.stiffness, b.compliance, b.lambda);
-  }
-  template <class Self>
-  static auto batch_wide_fields([[maybe_unused]] Self& b) {
-    return std::tie();
-  }
-  /// Q = k kᵀ of constraint c.
-  Matrix4r matrix(std::size_t c) const;
 };
 
 /// Validates and builds the batch. Throws InvalidInput naming the constraint for: an index out
@@ -74,30 +74,15 @@ void project_isometric_bending_constraints(ParticleArrays particles,
                                            const ProjectionSettings& settings);
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
-
-/// The batched kernel (project_isometric_bending_constraints).
-inline void project_constraints(ParticleArrays particles, IsometricBendingConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_isometric_bending_constraints(particles, batch, begin, end, settings);
-}
-
-/// Sequential reference (sequential_projection.hpp). Isometric bending:
-/// PositionBasedDynamics::solve_IsometricBendingConstraint with (Q = batch.matrix(c), stiffness),
-/// or XPBD::solve_IsometricBendingConstraint with (Q, compliance, settings.dt, lambda). Q = k kᵀ is
-/// rebuilt from the stored factor k.
-void project_sequentially(ParticleArrays particles, IsometricBendingConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings);
-
-/// Residual (constraint_residual.hpp). Isometric bending: |u| = |Σ_j k_j p_j| = sqrt(2C), the
-/// discrete mean-curvature vector of the kernel's C = ½ |u|² (Q = k kᵀ). Dimensionless: k scales as
-/// 1/length (Q as 1/area), so scaling a stencil leaves |u| unchanged, like the bending energy. The
-/// model assumes a flat rest shape: a rigid motion of a flat rest stencil reads 0, while a curved
-/// rest stencil reads its own rest curvature (the kernel's C is not 0 there either). A stencil
-/// collapsed to one point reads 0.
-void constraint_residuals(const ParticleArrays& particles, const IsometricBendingConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, Isometric bending: PositionBasedDynamics::solve_IsometricBendingConstraint
+// with (Q = batch.matrix(c), stiffness), or XPBD::solve_IsometricBendingConstraint with (Q,
+// compliance, settings.dt, lambda). Q = k kᵀ is rebuilt from the stored factor k.
+// constraint_residuals, Isometric bending: |u| = |Σ_j k_j p_j| = sqrt(2C), the discrete
+// mean-curvature vector of the kernel's C = ½ |u|² (Q = k kᵀ). Dimensionless: k scales as 1/length
+// (Q as 1/area), so scaling a stencil leaves |u| unchanged, like the bending energy. The model
+// assumes a flat rest shape: a rigid motion of a flat rest stencil reads 0, while a curved rest
+// stencil reads its own rest curvature (the kernel's C is not 0 there either). A stencil collapsed
+// to one point reads 0.
+TESSERA_FAMILY_ENTRY_POINTS(IsometricBendingConstraints, project_isometric_bending_constraints)
 
 }  // namespace tessera

@@ -33,6 +33,16 @@ struct ParticleTetContacts {
   static constexpr FamilyTraits kTraits = {
       .arity = 5, .xpbd = false, .multiplier = true, .velocity_pass = true,
       .cell = CellShape::none};
+  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
+  template <class Self>
+  static auto per_constraint_arrays(Self& b) {
+    return std::tie(b.barycentric, b.normal, b.tangent, b.effective_mass, b.max_tangential_impulse,
+                    b.normal_speed, b.friction, b.lambda);
+  }
+  template <class Self>
+  static auto batch_wide_fields(Self&) {
+    return std::tie();
+  }
   ConstraintParticles<5> particles;
   std::array<AlignedVector<Real>, 3> barycentric;
   std::array<AlignedVector<Real>, 3> normal;
@@ -49,16 +59,6 @@ struct ParticleTetContacts {
   AlignedVector<Real> lambda;
 
   std::size_t size() const { return particles.count; }
-  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
-  template <class Self>
-  static auto per_constraint_arrays(Self& b) {
-    return std::tie(b.barycentric, b.normal, b.tangent, b.effective_mass,
-                    b.max_tangential_impulse, b.normal_speed, b.friction, b.lambda);
-  }
-  template <class Self>
-  static auto batch_wide_fields(Self&) {
-    return std::tie();
-  }
 };
 
 /// The velocity arrays of a state, in the form the velocity solve reads and writes (x, y, z
@@ -94,30 +94,16 @@ void solve_particle_tet_contact_velocities(ParticleArrays velocities,
                                            std::size_t begin, std::size_t end, Real dt);
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
-
-/// The batched kernel (project_particle_tet_contacts).
-inline void project_constraints(ParticleArrays particles, ParticleTetContacts& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings&) {
-  project_particle_tet_contacts(particles, batch, begin, end);
-}
-
-/// Sequential reference (sequential_projection.hpp). Particle–tet contacts, position solve only
-/// (friction stays with solve_particle_tet_contact_velocities): PositionBasedDynamics::
-/// solve_ParticleTetContactConstraint with the barycentric coordinates and a constraintInfo rebuilt
-/// from the batch (col 0 normal, col 1 tangent, (0,2) effective_mass, (1,2) max_tangential_impulse,
-/// (2,2) normal_speed), accumulating the batch's lambda. The contact's multiplier rule is its own
-/// (clamped at 0): settings are not used.
-void project_sequentially(ParticleArrays particles, ParticleTetContacts& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings = {});
-
-/// Residual (constraint_residual.hpp). Particle–tet contact: the penetration depth max(0, −C) in
-/// length units, C = n · (p0 − Σ b_i x_i) the kernel's signed distance of the particle above the
-/// contact plane (stored normal n and barycentric b). 0 while the particle is on the outer side.
-void constraint_residuals(const ParticleArrays& particles, const ParticleTetContacts& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, Particle–tet contacts, position solve only (friction stays with
+// solve_particle_tet_contact_velocities): PositionBasedDynamics::
+// solve_ParticleTetContactConstraint with the barycentric coordinates and a constraintInfo rebuilt
+// from the batch (col 0 normal, col 1 tangent, (0,2) effective_mass, (1,2) max_tangential_impulse,
+// (2,2) normal_speed), accumulating the batch's lambda. The contact's multiplier rule is its own
+// (clamped at 0): settings are not used.
+// constraint_residuals, Particle–tet contact: the penetration depth max(0, −C) in length units, C =
+// n · (p0 − Σ b_i x_i) the kernel's signed distance of the particle above the contact plane (stored
+// normal n and barycentric b). 0 while the particle is on the outer side.
+TESSERA_FAMILY_ENTRY_POINTS(ParticleTetContacts, project_particle_tet_contacts)
 
 /// The velocity pass (solve_particle_tet_contact_velocities).
 inline void solve_velocity_constraints(ParticleArrays velocities, const ParticleTetContacts& batch,

@@ -58,12 +58,6 @@ struct ProximityDistanceConstraints {
   static constexpr FamilyTraits kTraits = {
       .arity = kParticles, .xpbd = false, .multiplier = false, .velocity_pass = false,
       .cell = CellShape::none};
-  ConstraintParticles<kParticles> particles;
-  AlignedVector<Real> rest_distance;
-  AlignedVector<Real> compression_stiffness;
-  AlignedVector<Real> stretch_stiffness;
-
-  std::size_t size() const { return particles.count; }
   /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
   template <class Self>
   static auto per_constraint_arrays(Self& b) {
@@ -73,6 +67,12 @@ struct ProximityDistanceConstraints {
   static auto batch_wide_fields(Self&) {
     return std::tie();
   }
+  ConstraintParticles<kParticles> particles;
+  AlignedVector<Real> rest_distance;
+  AlignedVector<Real> compression_stiffness;
+  AlignedVector<Real> stretch_stiffness;
+
+  std::size_t size() const { return particles.count; }
 };
 
 using EdgePointDistanceConstraintInput = ProximityDistanceConstraintInput;
@@ -112,69 +112,29 @@ void project_edge_edge_distance_constraints(ParticleArrays particles,
                                             const ProjectionSettings& settings = {});
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
+// project_sequentially, Point–edge distance:
+// PositionBasedDynamics::solve_EdgePointDistanceConstraint with (rest_distance,
+// compression_stiffness, stretch_stiffness). Stiffness semantics only, like
+// project_edge_point_distance_constraints: compliance semantics throw InvalidInput (the family has
+// no XPBD form).
+// constraint_residuals, Edge–point distance: |d − d0| / d0 with d the current point–segment
+// distance (closest point as in the kernel) and d0 the rest distance; |d| where d0 = 0.
+// Dimensionless for d0 > 0, a length for d0 = 0.
+TESSERA_FAMILY_ENTRY_POINTS(EdgePointDistanceConstraints, project_edge_point_distance_constraints)
 
-/// The batched kernel (project_edge_point_distance_constraints).
-inline void project_constraints(ParticleArrays particles, EdgePointDistanceConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_edge_point_distance_constraints(particles, batch, begin, end, settings);
-}
+// project_sequentially, Point–triangle distance:
+// PositionBasedDynamics::solve_TrianglePointDistanceConstraint with (rest_distance,
+// compression_stiffness, stretch_stiffness). Stiffness semantics only (compliance throws
+// InvalidInput, as in the batched kernel).
+// constraint_residuals, Triangle–point distance: |d − d0| / d0 (|d| where d0 = 0), d the current
+// point–triangle distance (a zero-area triangle is measured to its longest edge, as in the kernel).
+TESSERA_FAMILY_ENTRY_POINTS(TrianglePointDistanceConstraints, project_triangle_point_distance_constraints)
 
-/// Sequential reference (sequential_projection.hpp). Point–edge distance:
-/// PositionBasedDynamics::solve_EdgePointDistanceConstraint with (rest_distance,
-/// compression_stiffness, stretch_stiffness). Stiffness semantics only, like
-/// project_edge_point_distance_constraints: compliance semantics throw InvalidInput (the family has
-/// no XPBD form).
-void project_sequentially(ParticleArrays particles, const EdgePointDistanceConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings = {});
-
-/// Residual (constraint_residual.hpp). Edge–point distance: |d − d0| / d0 with d the current
-/// point–segment distance (closest point as in the kernel) and d0 the rest distance; |d| where d0 =
-/// 0. Dimensionless for d0 > 0, a length for d0 = 0.
-void constraint_residuals(const ParticleArrays& particles, const EdgePointDistanceConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
-
-/// The batched kernel (project_triangle_point_distance_constraints).
-inline void project_constraints(ParticleArrays particles, TrianglePointDistanceConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_triangle_point_distance_constraints(particles, batch, begin, end, settings);
-}
-
-/// Sequential reference (sequential_projection.hpp). Point–triangle distance:
-/// PositionBasedDynamics::solve_TrianglePointDistanceConstraint with (rest_distance,
-/// compression_stiffness, stretch_stiffness). Stiffness semantics only (compliance throws
-/// InvalidInput, as in the batched kernel).
-void project_sequentially(ParticleArrays particles,
-                          const TrianglePointDistanceConstraints& batch, std::size_t begin,
-                          std::size_t end, const ProjectionSettings& settings = {});
-
-/// Residual (constraint_residual.hpp). Triangle–point distance: |d − d0| / d0 (|d| where d0 = 0), d
-/// the current point–triangle distance (a zero-area triangle is measured to its longest edge, as in
-/// the kernel).
-void constraint_residuals(const ParticleArrays& particles, const TrianglePointDistanceConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
-
-/// The batched kernel (project_edge_edge_distance_constraints).
-inline void project_constraints(ParticleArrays particles, EdgeEdgeDistanceConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_edge_edge_distance_constraints(particles, batch, begin, end, settings);
-}
-
-/// Sequential reference (sequential_projection.hpp). Edge–edge distance:
-/// PositionBasedDynamics::solve_EdgeEdgeDistanceConstraint with (rest_distance,
-/// compression_stiffness, stretch_stiffness). Stiffness semantics only (compliance throws
-/// InvalidInput, as in the batched kernel).
-void project_sequentially(ParticleArrays particles, const EdgeEdgeDistanceConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings = {});
-
-/// Residual (constraint_residual.hpp). Edge–edge distance: |d − d0| / d0 (|d| where d0 = 0), d the
-/// current segment–segment distance (closest pair as in the kernel).
-void constraint_residuals(const ParticleArrays& particles, const EdgeEdgeDistanceConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, Edge–edge distance: PositionBasedDynamics::solve_EdgeEdgeDistanceConstraint
+// with (rest_distance, compression_stiffness, stretch_stiffness). Stiffness semantics only
+// (compliance throws InvalidInput, as in the batched kernel).
+// constraint_residuals, Edge–edge distance: |d − d0| / d0 (|d| where d0 = 0), d the current
+// segment–segment distance (closest pair as in the kernel).
+TESSERA_FAMILY_ENTRY_POINTS(EdgeEdgeDistanceConstraints, project_edge_edge_distance_constraints)
 
 }  // namespace tessera

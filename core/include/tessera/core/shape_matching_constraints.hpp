@@ -99,38 +99,24 @@ void project_shape_matching_constraints(ParticleArrays particles,
                                         std::size_t end);
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
-
-/// The batched kernel (project_shape_matching_constraints).
-inline void project_constraints(ParticleArrays particles, ShapeMatchingConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings&) {
-  project_shape_matching_constraints(particles, batch, begin, end);
-}
-
-/// Sequential reference (sequential_projection.hpp). Shape matching, one cluster after another:
-/// PositionBasedDynamics:: solve_ShapeMatchingConstraint with the cluster's rest shape in
-/// centre-of-mass coordinates (x0 = the stored rest offsets q, restCm = 0, so x0 - restCm is q
-/// exactly), the current positions and inverse masses of its particles, stiffness and
-/// allow_stretch. PBD only, like project_shape_matching_constraints: settings are not used. The
-/// scalar API weighs the particles by their current inverse masses, the batch by the masses it was
-/// built with: the two agree as long as the masses have not changed since the batch was built.
-void project_sequentially(ParticleArrays particles, const ShapeMatchingConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings = {});
-
-/// Residual (constraint_residual.hpp). Shape matching, c = the cluster: RMS_i |x_i − g_i| / RMS_i
-/// |q_i| (dimensionless), with q_i the cluster's rest offsets, g_i = T q_i + centre the kernel's
-/// goal positions (centre mass-weighted; T the kernel's rotation of A_pq, or A_pq A_qq⁻¹ when the
-/// batch allows stretch) and both RMS plain averages over the cluster's particles. Rigid clusters:
-/// a uniform scaling by s reads |s − 1|; where the kernel finds no rotation (A_pq of rank < 2, e.g.
-/// the cluster collapsed to a point) the rotation its iteration still returns is used, and since |R
-/// q_i| = |q_i| a cluster collapsed to one point reads 1. With stretch allowed, any affine image of
-/// the rest cluster reads 0, a collapse to one point included (the zero map matches it, and the
-/// kernel would not move it either). An empty cluster, or one whose rest offsets are all zero,
-/// reads 0.
-void constraint_residuals(const ParticleArrays& particles, const ShapeMatchingConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, Shape matching, one cluster after another: PositionBasedDynamics::
+// solve_ShapeMatchingConstraint with the cluster's rest shape in centre-of-mass coordinates (x0 =
+// the stored rest offsets q, restCm = 0, so x0 - restCm is q exactly), the current positions and
+// inverse masses of its particles, stiffness and allow_stretch. PBD only, like
+// project_shape_matching_constraints: settings are not used. The scalar API weighs the particles by
+// their current inverse masses, the batch by the masses it was built with: the two agree as long as
+// the masses have not changed since the batch was built.
+// constraint_residuals, Shape matching, c = the cluster: RMS_i |x_i − g_i| / RMS_i |q_i|
+// (dimensionless), with q_i the cluster's rest offsets, g_i = T q_i + centre the kernel's goal
+// positions (centre mass-weighted; T the kernel's rotation of A_pq, or A_pq A_qq⁻¹ when the batch
+// allows stretch) and both RMS plain averages over the cluster's particles. Rigid clusters: a
+// uniform scaling by s reads |s − 1|; where the kernel finds no rotation (A_pq of rank < 2, e.g.
+// the cluster collapsed to a point) the rotation its iteration still returns is used, and since |R
+// q_i| = |q_i| a cluster collapsed to one point reads 1. With stretch allowed, any affine image of
+// the rest cluster reads 0, a collapse to one point included (the zero map matches it, and the
+// kernel would not move it either). An empty cluster, or one whose rest offsets are all zero, reads
+// 0.
+TESSERA_FAMILY_ENTRY_POINTS(ShapeMatchingConstraints, project_shape_matching_constraints)
 
 /// The same for one cluster (the batched form loops over it: clusters do not fit lanes).
 Real constraint_residual(const ParticleArrays& particles, const ShapeMatchingConstraints& batch,

@@ -32,6 +32,15 @@ struct StrainTetraConstraints {
   static constexpr FamilyTraits kTraits = {
       .arity = 4, .xpbd = false, .multiplier = false, .velocity_pass = false,
       .cell = CellShape::tetrahedron};
+  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
+  template <class Self>
+  static auto per_constraint_arrays(Self& b) {
+    return std::tie(b.rest_inverse, b.stretch_stiffness, b.shear_stiffness);
+  }
+  template <class Self>
+  static auto batch_wide_fields(Self& b) {
+    return std::tie(b.normalize_stretch, b.normalize_shear);
+  }
   ConstraintParticles<4> particles;
   /// invRestMat(k, j) of every constraint in rest_inverse[3k + j].
   std::array<AlignedVector<Real>, 9> rest_inverse;
@@ -42,15 +51,6 @@ struct StrainTetraConstraints {
   bool normalize_shear = false;
 
   std::size_t size() const { return particles.count; }
-  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
-  template <class Self>
-  static auto per_constraint_arrays(Self& b) {
-    return std::tie(b.rest_inverse, b.stretch_stiffness, b.shear_stiffness);
-  }
-  template <class Self>
-  static auto batch_wide_fields([[maybe_unused]] Self& b) {
-    return std::tie(b.normalize_stretch, b.normalize_shear);
-  }
 };
 
 /// Validates and builds the batch. Throws InvalidInput naming the constraint for: an index out
@@ -67,28 +67,13 @@ void project_strain_tetra_constraints(ParticleArrays particles,
                                       std::size_t end, const ProjectionSettings& settings);
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
-
-/// The batched kernel (project_strain_tetra_constraints).
-inline void project_constraints(ParticleArrays particles, StrainTetraConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_strain_tetra_constraints(particles, batch, begin, end, settings);
-}
-
-/// Sequential reference (sequential_projection.hpp). Strain tetrahedron:
-/// PositionBasedDynamics::solve_StrainTetraConstraint with (invRestMat from rest_inverse,
-/// stretch_stiffness[0..2], shear_stiffness[0..2] = xy, xz, yz, normalize_stretch,
-/// normalize_shear). No XPBD form: the PBD form under either semantics.
-void project_sequentially(ParticleArrays particles, const StrainTetraConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings);
-
-/// Residual (constraint_residual.hpp). Strain tetrahedron: ‖E‖_F of the 3×3 Green strain E = ½ (FᵀF
-/// − I), F = [p1 − p0, p2 − p0, p3 − p0] · invRestMat (p0 the reference vertex). Dimensionless; 0
-/// at any rigid motion of the rest shape (also of a mirrored one: Green strain does not see
-/// inversion). A tetrahedron collapsed to one point reads √3 / 2.
-void constraint_residuals(const ParticleArrays& particles, const StrainTetraConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, Strain tetrahedron: PositionBasedDynamics::solve_StrainTetraConstraint with
+// (invRestMat from rest_inverse, stretch_stiffness[0..2], shear_stiffness[0..2] = xy, xz, yz,
+// normalize_stretch, normalize_shear). No XPBD form: the PBD form under either semantics.
+// constraint_residuals, Strain tetrahedron: ‖E‖_F of the 3×3 Green strain E = ½ (FᵀF − I), F = [p1
+// − p0, p2 − p0, p3 − p0] · invRestMat (p0 the reference vertex). Dimensionless; 0 at any rigid
+// motion of the rest shape (also of a mirrored one: Green strain does not see inversion). A
+// tetrahedron collapsed to one point reads √3 / 2.
+TESSERA_FAMILY_ENTRY_POINTS(StrainTetraConstraints, project_strain_tetra_constraints)
 
 }  // namespace tessera

@@ -34,6 +34,15 @@ struct StrainTriangleConstraints {
   static constexpr FamilyTraits kTraits = {
       .arity = 3, .xpbd = false, .multiplier = false, .velocity_pass = false,
       .cell = CellShape::triangle};
+  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
+  template <class Self>
+  static auto per_constraint_arrays(Self& b) {
+    return std::tie(b.rest_inverse, b.xx_stiffness, b.yy_stiffness, b.xy_stiffness);
+  }
+  template <class Self>
+  static auto batch_wide_fields(Self& b) {
+    return std::tie(b.normalize_stretch, b.normalize_shear);
+  }
   ConstraintParticles<3> particles;
   /// invRestMat(k, j) of every constraint in rest_inverse[2k + j].
   std::array<AlignedVector<Real>, 4> rest_inverse;
@@ -44,15 +53,6 @@ struct StrainTriangleConstraints {
   bool normalize_shear = false;
 
   std::size_t size() const { return particles.count; }
-  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
-  template <class Self>
-  static auto per_constraint_arrays(Self& b) {
-    return std::tie(b.rest_inverse, b.xx_stiffness, b.yy_stiffness, b.xy_stiffness);
-  }
-  template <class Self>
-  static auto batch_wide_fields([[maybe_unused]] Self& b) {
-    return std::tie(b.normalize_stretch, b.normalize_shear);
-  }
 };
 
 /// Validates and builds the batch. Throws InvalidInput naming the constraint for: an index out
@@ -72,30 +72,15 @@ void project_strain_triangle_constraints(ParticleArrays particles,
                                          const ProjectionSettings& settings);
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
-
-/// The batched kernel (project_strain_triangle_constraints).
-inline void project_constraints(ParticleArrays particles, StrainTriangleConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_strain_triangle_constraints(particles, batch, begin, end, settings);
-}
-
-/// Sequential reference (sequential_projection.hpp). Strain triangle:
-/// PositionBasedDynamics::solve_StrainTriangleConstraint with (invRestMat from rest_inverse,
-/// xx/yy/xy_stiffness, normalize_stretch, normalize_shear). No XPBD form: the PBD form under either
-/// semantics (settings are not used).
-void project_sequentially(ParticleArrays particles, const StrainTriangleConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings);
-
-/// Residual (constraint_residual.hpp). Strain triangle: ‖E‖_F, the Frobenius norm of the 2×2 Green
-/// strain E = ½ (FᵀF − I) with F = [p1 − p0, p2 − p0] · invRestMat (3×2, p0 the reference vertex,
-/// as in the kernel). Dimensionless; 0 for a rigid motion of the rest triangle. Note the family's
-/// convention: the rest triangle is taken in the xy plane (init_StrainTriangleConstraint), so the
-/// rest positions a batch was built from read 0 only when they lie in that plane. A triangle
-/// collapsed to one point reads √2 / 2.
-void constraint_residuals(const ParticleArrays& particles, const StrainTriangleConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, Strain triangle: PositionBasedDynamics::solve_StrainTriangleConstraint with
+// (invRestMat from rest_inverse, xx/yy/xy_stiffness, normalize_stretch, normalize_shear). No XPBD
+// form: the PBD form under either semantics (settings are not used).
+// constraint_residuals, Strain triangle: ‖E‖_F, the Frobenius norm of the 2×2 Green strain E = ½
+// (FᵀF − I) with F = [p1 − p0, p2 − p0] · invRestMat (3×2, p0 the reference vertex, as in the
+// kernel). Dimensionless; 0 for a rigid motion of the rest triangle. Note the family's convention:
+// the rest triangle is taken in the xy plane (init_StrainTriangleConstraint), so the rest positions
+// a batch was built from read 0 only when they lie in that plane. A triangle collapsed to one point
+// reads √2 / 2.
+TESSERA_FAMILY_ENTRY_POINTS(StrainTriangleConstraints, project_strain_triangle_constraints)
 
 }  // namespace tessera

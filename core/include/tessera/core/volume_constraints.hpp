@@ -28,6 +28,15 @@ struct VolumeConstraints {
   static constexpr FamilyTraits kTraits = {
       .arity = 4, .xpbd = true, .multiplier = true, .velocity_pass = false,
       .cell = CellShape::tetrahedron};
+  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
+  template <class Self>
+  static auto per_constraint_arrays(Self& b) {
+    return std::tie(b.rest_volume, b.stiffness, b.compliance, b.lambda);
+  }
+  template <class Self>
+  static auto batch_wide_fields(Self&) {
+    return std::tie();
+  }
   ConstraintParticles<4> particles;
   /// Signed rest volume V0.
   AlignedVector<Real> rest_volume;
@@ -37,15 +46,6 @@ struct VolumeConstraints {
   AlignedVector<Real> lambda;
 
   std::size_t size() const { return particles.count; }
-  /// Its arrays by constraint and its batch-wide fields (see constraint_families.hpp).
-  template <class Self>
-  static auto per_constraint_arrays(Self& b) {
-    return std::tie(b.rest_volume, b.stiffness, b.compliance, b.lambda);
-  }
-  template <class Self>
-  static auto batch_wide_fields([[maybe_unused]] Self& b) {
-    return std::tie();
-  }
 };
 
 /// Validates and builds the batch. Throws InvalidInput naming the constraint for: an index out
@@ -65,28 +65,12 @@ void project_volume_constraints(ParticleArrays particles, VolumeConstraints& con
                                 const ProjectionSettings& settings);
 
 // ------------------------------------------------------------ the family's entry points
-// The names generic code calls (constraint_families.hpp), overloaded on the batch type.
-
-/// The batched kernel (project_volume_constraints).
-inline void project_constraints(ParticleArrays particles, VolumeConstraints& batch,
-                                std::size_t begin, std::size_t end,
-                                const ProjectionSettings& settings) {
-  project_volume_constraints(particles, batch, begin, end, settings);
-}
-
-/// Sequential reference (sequential_projection.hpp). Volume:
-/// PositionBasedDynamics::solve_VolumeConstraint with (rest_volume, stiffness), or
-/// XPBD::solve_VolumeConstraint with (rest_volume, compliance, settings.dt, lambda).
-void project_sequentially(ParticleArrays particles, VolumeConstraints& batch,
-                          std::size_t begin, std::size_t end,
-                          const ProjectionSettings& settings);
-
-/// Residual (constraint_residual.hpp). Volume: relative volume change |V − V0| / |V0|
-/// (dimensionless), V the signed volume (1/6) ((p1 − p0) × (p2 − p0)) · (p3 − p0) with p0 the
-/// reference vertex, as in the kernel; an inverted tetrahedron counts its full signed change
-/// (inverting a unit tet reads 2). A flat or collapsed tetrahedron reads 1. (A zero V0, which the
-/// builder rejects, would read |V|.)
-void constraint_residuals(const ParticleArrays& particles, const VolumeConstraints& batch,
-                          std::size_t begin, std::size_t end, Real* out);
+// project_sequentially, Volume: PositionBasedDynamics::solve_VolumeConstraint with (rest_volume,
+// stiffness), or XPBD::solve_VolumeConstraint with (rest_volume, compliance, settings.dt, lambda).
+// constraint_residuals, Volume: relative volume change |V − V0| / |V0| (dimensionless), V the
+// signed volume (1/6) ((p1 − p0) × (p2 − p0)) · (p3 − p0) with p0 the reference vertex, as in the
+// kernel; an inverted tetrahedron counts its full signed change (inverting a unit tet reads 2). A
+// flat or collapsed tetrahedron reads 1. (A zero V0, which the builder rejects, would read |V|.)
+TESSERA_FAMILY_ENTRY_POINTS(VolumeConstraints, project_volume_constraints)
 
 }  // namespace tessera

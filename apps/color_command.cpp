@@ -13,6 +13,7 @@
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/model_graph.hpp>
 #include <tessera/core/error.hpp>
+#include <tessera/core/fingerprint.hpp>
 #include <tessera/parallel/threads.hpp>
 
 #include "commands.hpp"
@@ -79,7 +80,7 @@ int color_command(const ColorOptions& options) {
     entry["seconds"] = s.seconds;
     entry["valid"] = s.valid;
     if (!s.valid) entry["problem"] = s.problem;
-    entry["colouring_hash"] = hex(fnv1a(colours.data(), colours.size_bytes()));
+    entry["colouring_hash"] = colouring_hash(colours);
     entry["sizes"] = s.sizes;
     results.push_back(std::move(entry));
   }

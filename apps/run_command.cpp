@@ -14,6 +14,7 @@
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/model_graph.hpp>
 #include <tessera/core/error.hpp>
+#include <tessera/core/fingerprint.hpp>
 #include <tessera/parallel/solver.hpp>
 #include <tessera/parallel/threads.hpp>
 
@@ -43,15 +44,6 @@ io::SimulationSettings simulation_of(const io::SceneDescription& scene, const Ru
   if (options.strategy) simulation.strategy = *options.strategy;
   if (options.mode) simulation.mode = *options.mode;
   return simulation;
-}
-
-std::string state_hash(const std::vector<Vector3r>& positions) {
-  std::uint64_t hash = fnv1a(nullptr, 0);
-  for (const Vector3r& p : positions) {
-    const Real xyz[3] = {p.x(), p.y(), p.z()};
-    hash = fnv1a(xyz, sizeof xyz, hash);
-  }
-  return hex(hash);
 }
 
 }  // namespace

@@ -11,12 +11,6 @@
 
 namespace tessera::cli {
 
-/// 64-bit FNV-1a of a byte range, continuing from `hash`: the state and colouring hashes.
-std::uint64_t fnv1a(const void* data, std::size_t size,
-                    std::uint64_t hash = 14695981039346656037ull);
-/// 16 lowercase hex digits.
-std::string hex(std::uint64_t value);
-
 class Summary {
  public:
   template <class Value>

@@ -167,6 +167,39 @@ void BM_PhaseOverhead(benchmark::State& state) {
 }
 BENCHMARK(BM_PhaseOverhead)->Name("solver/phase_overhead")->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime();
 
+/// solver/step_tiny: one step() of a 2-particle model with 1 distance constraint (one pinned
+/// end), default settings on one thread (residual reports and the finiteness guard on): the
+/// fixed cost of a step, the C++ side of the Python binding's call overhead
+/// (bench/python_overhead.py times the same call through tessera.Solver.step, side by side).
+void BM_StepTiny(benchmark::State& state) {
+  const std::vector<Vector3r> points = {Vector3r(0, 0, 0), Vector3r(1, 0, 0)};
+  const std::vector<Real> inverse_masses = {0, 1};
+  const std::vector<ParticleIndex> edge = {0, 1};
+  Model model;
+  model.particles = ParticleState(points, inverse_masses);
+  model.constraints.distance = make_distance_constraints({edge, points});
+  SolverSettings settings;
+  settings.threads = 1;
+  Solver solver(model, test::colour_model(model), settings);
+  for (auto _ : state) solver.step();
+}
+BENCHMARK(BM_StepTiny)->Name("solver/step_tiny")->UseRealTime();
+
+/// solver/positions/cloth1024: Solver::positions() on the 1024² cloth coloured with the
+/// locality pass (particles renumbered, as `tessera run` does): the user-order copy the Python
+/// binding's Solver.positions makes as an (N, 3) array.
+void BM_PositionsCopy(benchmark::State& state) {
+  const Model& model = scene("cloth1024");
+  SolverSettings settings;
+  settings.threads = 1;
+  const ColouringRun run = run_colouring(ColouringRegistry::with_builtin_strategies().get("stencil"),
+                                         constraint_graph(model), ColouringOptions{.locality = true});
+  Solver solver(model, run.colouring, settings);
+  for (auto _ : state) benchmark::DoNotOptimize(solver.positions());
+  state.SetBytesProcessed(state.iterations() * std::int64_t(3 * sizeof(Real) * solver.particle_count()));
+}
+BENCHMARK(BM_PositionsCopy)->Name("solver/positions/cloth1024")->UseRealTime()->Unit(benchmark::kMillisecond);
+
 /// Thread counts of the thread-scaling benchmarks beyond 1: 2, 4, 8, … below the hardware
 /// thread count, then the hardware thread count itself (just 2 on a 2-core machine).
 std::vector<int> scaling_thread_counts() {

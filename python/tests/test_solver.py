@@ -1,0 +1,154 @@
+"""tessera.Solver: bitwise the tool's solve (state hash), copies and views of the state,
+errors with their messages, and the GIL released while it steps."""
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import tessera
+
+
+@pytest.mark.parametrize("mode", tessera.modes())
+@pytest.mark.parametrize("spec, strategy", [("cloth:12", "greedy"), ("bar:2x2x4", "dsatur")])
+def test_a_solve_is_bitwise_the_tools(tool, spec, strategy, mode):
+    expected = tool("run", spec, "--frames", "4", "--strategy", strategy, "--mode", mode)
+    scene = tessera.scene(spec)
+    # `tessera run` colours with the locality pass (and the balance pass only when asked).
+    colouring = tessera.colour(scene.model, strategy, locality=True)
+    settings = scene.solver_settings() | {"mode": mode}
+    solver = tessera.Solver(scene.model, colouring, **settings)
+    solver.step(4)
+    assert solver.state_hash() == expected["state_hash"]
+    assert solver.residual()["rms"] == expected["residual_rms_final"]
+    assert solver.statistics["projections"] == expected["projections"]
+
+
+def test_a_model_from_arrays_solves_as_the_scene_it_copies():
+    scene = tessera.scene("cloth:10")
+    model = tessera.Model(scene.model.positions, scene.model.inverse_masses)
+    for family in scene.model.constraint_counts:
+        arrays = scene.model.constraints(family)
+        model.set_constraints(family, arrays["particles"], stiffness=arrays["stiffness"],
+                              compliance=arrays["compliance"])
+    hashes = set()
+    for source, threads in ((scene.model, 1), (model, 1), (model, 2)):
+        solver = tessera.Solver(source, tessera.colour(source, "stencil", locality=True),
+                                threads=threads, substeps=4)
+        solver.step(5)
+        hashes.add(solver.state_hash())
+    assert len(hashes) == 1
+
+
+def test_positions_and_velocities_copies_and_views_agree():
+    scene = tessera.scene("cloth:9")
+    colouring = tessera.colour(scene.model, "greedy", locality=True)
+    solver = tessera.Solver(scene.model, colouring, substeps=2)
+    np.testing.assert_array_equal(solver.positions, scene.model.positions)
+    solver.step(3)
+    x = solver.positions
+    assert x.shape == (81, 3) and x.dtype == tessera.real_dtype and x.flags.writeable
+    views = solver.scheduled_positions
+    user = solver.scheduled_to_user
+    np.testing.assert_array_equal(user, colouring.particle_new_to_old)
+    for axis in range(3):
+        assert not views[axis].flags.writeable and not views[axis].flags.owndata
+        np.testing.assert_array_equal(views[axis], x[user, axis])
+    v = solver.velocities
+    for axis, view in enumerate(solver.scheduled_velocities):
+        np.testing.assert_array_equal(view, v[user, axis])
+    # The views are live: they follow the solver.
+    before = views[1].copy()
+    solver.step()
+    assert not np.array_equal(before, views[1])
+    np.testing.assert_array_equal(views[1], solver.positions[user, 1])
+    # Without renumbering, scheduled order is the user's.
+    plain = tessera.Solver(scene.model, tessera.colour(scene.model, "greedy"))
+    np.testing.assert_array_equal(plain.scheduled_to_user, np.arange(81))
+
+
+def test_set_positions_and_velocities_round_trip():
+    scene = tessera.scene("cloth:6")
+    solver = tessera.Solver(scene.model, tessera.colour(scene.model, locality=True))
+    rng = np.random.default_rng(3)
+    x = rng.random((36, 3)).astype(tessera.real_dtype)
+    v = rng.random((36, 3))
+    solver.set_positions(x)
+    solver.set_velocities(v)
+    np.testing.assert_array_equal(solver.positions, x)
+    np.testing.assert_array_equal(solver.velocities, v.astype(tessera.real_dtype))
+    with pytest.raises(ValueError, match=r"^positions must have 36 rows \(one per particle\), not 35$"):
+        solver.set_positions(x[:35])
+    x[4, 0] = np.inf
+    with pytest.raises(ValueError, match=r"^particle 4: position is not finite$"):
+        solver.set_positions(x)
+
+
+def test_residuals_statistics_and_projection():
+    scene = tessera.scene("cloth:8")
+    solver = tessera.Solver(scene.model, tessera.colour(scene.model), iterations=3,
+                            record_convergence=True)
+    solver.step(2)
+    report = solver.last_step
+    assert len(report["history"]) == 4
+    assert report["history"][-1] == report["residual_after"]
+    assert set(report["residual_after"]["families"]) == {"distance", "dihedral"}
+    statistics = solver.statistics
+    assert statistics["steps"] == 2 and statistics["projections"] == 2 * 3 * 294
+    assert statistics["constraints_per_family"] == {"distance": 161, "dihedral": 133}
+    before = solver.residual()["rms"]
+    solver.project(50)
+    assert solver.residual()["rms"] < before
+    assert solver.settings["iterations"] == 3 and solver.settings["mode"] == "gs"
+
+
+def test_errors_carry_their_messages():
+    scene = tessera.scene("cloth:3")
+    colouring = tessera.colour(scene.model)
+    with pytest.raises(ValueError, match=r"^solver settings: block size must be at least 1$"):
+        tessera.Solver(scene.model, colouring, block_size=0)
+    with pytest.raises(ValueError, match=r"^solver settings: gravity is not finite$"):
+        tessera.Solver(scene.model, colouring, gravity=(0, np.nan, 0))
+    with pytest.raises(ValueError, match=r"^unknown solver mode 'fast'|mode"):
+        tessera.Solver(scene.model, colouring, mode="fast")
+    with pytest.raises(ValueError, match=r"^solver: mode gs needs a colouring"):
+        tessera.Solver(scene.model)
+    solver = tessera.Solver(scene.model, colouring, time_step=np.finfo(np.float32).max / 4)
+    x, v = solver.positions, solver.velocities
+    with pytest.raises(tessera.NumericalFailure) as failure:
+        solver.step()
+    assert isinstance(failure.value, RuntimeError)
+    assert str(failure.value) == (
+        "solver: step 1 made particle 0 non-finite; positions and velocities are restored to "
+        "before it (check the time step, compliance and velocities)")
+    np.testing.assert_array_equal(solver.positions, x)
+    np.testing.assert_array_equal(solver.velocities, v)
+
+
+def test_the_gil_is_released_while_stepping_and_colouring():
+    """A second Python thread counts while the main thread is inside step() or colour(); with
+    the GIL held it could not run at all until the call returned."""
+    scene = tessera.scene("cloth:96")
+    colouring = tessera.colour(scene.model, "greedy")
+    solver = tessera.Solver(scene.model, colouring, threads=1, iterations=150,
+                            report_residuals=False)
+    count, stop = [0], threading.Event()
+
+    def counter():
+        while not stop.is_set():
+            count[0] += 1
+
+    thread = threading.Thread(target=counter)
+    thread.start()
+    try:
+        time.sleep(0.05)
+        for call in (lambda: solver.step(), lambda: solver.project(150),
+                     lambda: tessera.colour(scene.model, "dsatur", balance=True, threads=1)):
+            start_count, start = count[0], time.perf_counter()
+            call()
+            elapsed, counted = time.perf_counter() - start, count[0] - start_count
+            assert elapsed > 0.02, "the call is too short to tell"
+            assert counted > 1000, (counted, elapsed)
+    finally:
+        stop.set()
+        thread.join()

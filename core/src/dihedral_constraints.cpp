@@ -31,12 +31,14 @@ void ProjectDihedralConstraints(ParticleArrays particles, DihedralConstraints& c
 }
 
 void DihedralResiduals(const ParticleArrays& particles, const DihedralConstraints& batch,
-                       std::size_t begin, std::size_t end, Real* out) {
+                       std::size_t begin, std::size_t end, Real inverse_dt2, Real* out) {
   residual_lanes<4>(particles, batch.particles, begin, end, out,
                     [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
-                      return lane_abs(dihedral_constraint(p[0], p[1], p[2], p[3],
-                                                          load(batch.rest_angle.data(), i))
-                                          .C);
+                      const RealLanes C = dihedral_constraint(p[0], p[1], p[2], p[3],
+                                                              load(batch.rest_angle.data(), i))
+                                              .C;
+                      return lane_abs(xpbd_residual(C, batch.compliance.data(),
+                                                    batch.lambda.data(), i, inverse_dt2));
                     });
 }
 
@@ -103,7 +105,12 @@ void project_dihedral_constraints(ParticleArrays particles, DihedralConstraints&
 
 void constraint_residuals(const ParticleArrays& particles, const DihedralConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out) {
-  HWY_DYNAMIC_DISPATCH(DihedralResiduals)(particles, batch, begin, end, out);
+  HWY_DYNAMIC_DISPATCH(DihedralResiduals)(particles, batch, begin, end, Real(0), out);
+}
+
+void xpbd_residuals(const ParticleArrays& particles, const DihedralConstraints& batch,
+                    std::size_t begin, std::size_t end, Real dt, Real* out) {
+  HWY_DYNAMIC_DISPATCH(DihedralResiduals)(particles, batch, begin, end, detail::inverse_squared(dt), out);
 }
 
 void project_sequentially(ParticleArrays particles, DihedralConstraints& batch,

@@ -30,11 +30,13 @@ void ProjectDistanceConstraints(ParticleArrays particles, DistanceConstraints& c
 }
 
 void DistanceResiduals(const ParticleArrays& particles, const DistanceConstraints& batch,
-                       std::size_t begin, std::size_t end, Real* out) {
+                       std::size_t begin, std::size_t end, Real inverse_dt2, Real* out) {
   residual_lanes<2>(particles, batch.particles, begin, end, out,
                     [&](const Vec3<RealLanes> (&p)[2], std::size_t i) {
                       const RealLanes rest_length = load(batch.rest_length.data(), i);
-                      return relative(distance_constraint(p[0], p[1], rest_length).C,
+                      const RealLanes C = distance_constraint(p[0], p[1], rest_length).C;
+                      return relative(xpbd_residual(C, batch.compliance.data(),
+                                                    batch.lambda.data(), i, inverse_dt2),
                                       rest_length);
                     });
 }
@@ -90,7 +92,12 @@ void project_distance_constraints(ParticleArrays particles, DistanceConstraints&
 
 void constraint_residuals(const ParticleArrays& particles, const DistanceConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out) {
-  HWY_DYNAMIC_DISPATCH(DistanceResiduals)(particles, batch, begin, end, out);
+  HWY_DYNAMIC_DISPATCH(DistanceResiduals)(particles, batch, begin, end, Real(0), out);
+}
+
+void xpbd_residuals(const ParticleArrays& particles, const DistanceConstraints& batch,
+                    std::size_t begin, std::size_t end, Real dt, Real* out) {
+  HWY_DYNAMIC_DISPATCH(DistanceResiduals)(particles, batch, begin, end, detail::inverse_squared(dt), out);
 }
 
 void project_sequentially(ParticleArrays particles, DistanceConstraints& batch,

@@ -81,6 +81,35 @@ void FEMTetraResiduals(const ParticleArrays& particles, const FEMTetraConstraint
   green_strain_residuals<4>(particles, batch, begin, end, out);
 }
 
+/// |C + α̃λ| / sqrt(V) with the XPBD form's C = sqrt(2 V ψ₁(F)) (xpbd.hpp): sqrt(2 ψ₁) is a
+/// strain-sized number (ψ₁ ≈ ½ ε² for a small strain ε), so the residual reads like the
+/// Green strain it replaces.
+void FEMTetraXpbdResiduals(const ParticleArrays& particles, const FEMTetraConstraints& batch,
+                           std::size_t begin, std::size_t end, Real inverse_dt2, Real* out) {
+  const RealTag d;
+  residual_lanes<4>(particles, batch.particles, begin, end, out,
+                    [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
+                      RealLanes m[3][3];
+                      rest_inverse_of<3>(batch.rest_inverse, i, m);
+                      Mat3<RealLanes> rest_inverse;
+                      for (int j = 0; j < 3; ++j)
+                        rest_inverse.col[j] = {m[0][j], m[1][j], m[2][j]};
+                      const RealLanes volume = load(batch.volume.data(), i);
+                      const RealLanes nu = load(batch.poisson_ratio.data(), i);
+                      const Mask<RealLanes> valid =
+                          mask_and(valid_poisson_ratio(nu), volume > zero<RealLanes>());
+                      RealLanes mu, lame;
+                      lame_parameters(hn::Set(d, Real(1)), nu, valid, mu, lame);
+                      const TetraEnergy<RealLanes> element = fem_tetra_energy(
+                          p, volume, rest_inverse, mu, lame, batch.handle_inversion);
+                      const RealLanes C = lane_sqrt(splat<RealLanes>(2.0) *
+                                                    lane_max(element.energy, zero<RealLanes>()));
+                      const RealLanes h = xpbd_residual(C, batch.compliance.data(),
+                                                        batch.lambda.data(), i, inverse_dt2);
+                      return safe_divide(lane_abs(h), lane_sqrt(volume), valid);
+                    });
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();
@@ -99,6 +128,7 @@ HWY_AFTER_NAMESPACE();
 namespace tessera {
 HWY_EXPORT(ProjectFEMTetraConstraints);
 HWY_EXPORT(FEMTetraResiduals);
+HWY_EXPORT(FEMTetraXpbdResiduals);
 
 FEMTetraConstraints make_fem_tetra_constraints(const FEMTetraConstraintInput& input) {
   const detail::ConstraintValidator validator(FEMTetraConstraints::kFamily,
@@ -144,6 +174,12 @@ void project_fem_tetra_constraints(ParticleArrays particles, FEMTetraConstraints
 void constraint_residuals(const ParticleArrays& particles, const FEMTetraConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out) {
   HWY_DYNAMIC_DISPATCH(FEMTetraResiduals)(particles, batch, begin, end, out);
+}
+
+void xpbd_residuals(const ParticleArrays& particles, const FEMTetraConstraints& batch,
+                    std::size_t begin, std::size_t end, Real dt, Real* out) {
+  HWY_DYNAMIC_DISPATCH(FEMTetraXpbdResiduals)(particles, batch, begin, end,
+                                              detail::inverse_squared(dt), out);
 }
 
 void project_sequentially(ParticleArrays particles, FEMTetraConstraints& batch,

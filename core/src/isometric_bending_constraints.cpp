@@ -37,15 +37,19 @@ void ProjectIsometricBendingConstraints(ParticleArrays particles,
 
 void IsometricBendingResiduals(const ParticleArrays& particles,
                                const IsometricBendingConstraints& batch, std::size_t begin,
-                               std::size_t end, Real* out) {
+                               std::size_t end, Real inverse_dt2, Real* out) {
   residual_lanes<4>(particles, batch.particles, begin, end, out,
                     [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
                       const RealLanes k[4] = {
                           load(batch.factor[0].data(), i), load(batch.factor[1].data(), i),
                           load(batch.factor[2].data(), i), load(batch.factor[3].data(), i)};
-                      // C = ½ |u|² ≥ 0, so |u| = sqrt(2C).
-                      return lane_sqrt(splat<RealLanes>(2.0) *
-                                       isometric_bending_constraint(p, k).C);
+                      // C = ½ |u|² ≥ 0, so |u| = sqrt(2C); the XPBD residual in the same
+                      // units is sqrt(2 |C + α̃λ|).
+                      const RealLanes h =
+                          xpbd_residual(isometric_bending_constraint(p, k).C,
+                                        batch.compliance.data(), batch.lambda.data(), i,
+                                        inverse_dt2);
+                      return lane_sqrt(splat<RealLanes>(2.0) * lane_abs(h));
                     });
 }
 
@@ -120,7 +124,13 @@ void project_isometric_bending_constraints(ParticleArrays particles,
 void constraint_residuals(const ParticleArrays& particles,
                           const IsometricBendingConstraints& batch, std::size_t begin,
                           std::size_t end, Real* out) {
-  HWY_DYNAMIC_DISPATCH(IsometricBendingResiduals)(particles, batch, begin, end, out);
+  HWY_DYNAMIC_DISPATCH(IsometricBendingResiduals)(particles, batch, begin, end, Real(0), out);
+}
+
+void xpbd_residuals(const ParticleArrays& particles, const IsometricBendingConstraints& batch,
+                    std::size_t begin, std::size_t end, Real dt, Real* out) {
+  HWY_DYNAMIC_DISPATCH(IsometricBendingResiduals)(particles, batch, begin, end,
+                                                  detail::inverse_squared(dt), out);
 }
 
 void project_sequentially(ParticleArrays particles, IsometricBendingConstraints& batch,

@@ -30,13 +30,14 @@ void ProjectVolumeConstraints(ParticleArrays particles, VolumeConstraints& const
 }
 
 void VolumeResiduals(const ParticleArrays& particles, const VolumeConstraints& batch,
-                     std::size_t begin, std::size_t end, Real* out) {
+                     std::size_t begin, std::size_t end, Real inverse_dt2, Real* out) {
   residual_lanes<4>(particles, batch.particles, begin, end, out,
                     [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
                       const RealLanes rest_volume = load(batch.rest_volume.data(), i);
-                      return relative(
-                          volume_constraint(p[0], p[1], p[2], p[3], rest_volume).C,
-                          rest_volume);
+                      const RealLanes C = volume_constraint(p[0], p[1], p[2], p[3], rest_volume).C;
+                      return relative(xpbd_residual(C, batch.compliance.data(),
+                                                    batch.lambda.data(), i, inverse_dt2),
+                                      rest_volume);
                     });
 }
 
@@ -106,7 +107,12 @@ void project_volume_constraints(ParticleArrays particles, VolumeConstraints& con
 
 void constraint_residuals(const ParticleArrays& particles, const VolumeConstraints& batch,
                           std::size_t begin, std::size_t end, Real* out) {
-  HWY_DYNAMIC_DISPATCH(VolumeResiduals)(particles, batch, begin, end, out);
+  HWY_DYNAMIC_DISPATCH(VolumeResiduals)(particles, batch, begin, end, Real(0), out);
+}
+
+void xpbd_residuals(const ParticleArrays& particles, const VolumeConstraints& batch,
+                    std::size_t begin, std::size_t end, Real dt, Real* out) {
+  HWY_DYNAMIC_DISPATCH(VolumeResiduals)(particles, batch, begin, end, detail::inverse_squared(dt), out);
 }
 
 void project_sequentially(ParticleArrays particles, VolumeConstraints& batch,

@@ -153,6 +153,64 @@ TEST(DistanceResidual, EachConstraintReadsItsOwnParticles) {
   EXPECT_NEAR(residual(batch, current, 1), Real(0.3), kResidualTolerance);
 }
 
+// ------------------------------------------------------------------ the XPBD residual
+/// xpbd_residuals measures C + α̃λ in the family's units: distance |C + α̃λ| / l0, and it is
+/// the plain residual where λ = 0 or α = 0.
+TEST(XpbdResidual, DistanceMeasuresCPlusAlphaTildeLambda) {
+  const std::vector<Vector3r> rest = {Vector3r(0, 0, 0), Vector3r(2, 0, 0)};
+  const std::vector<ParticleIndex> edge = {0, 1};
+  DistanceConstraints batch = make_distance_constraints({edge, rest, 1, Real(1e-4)});
+  const std::vector<Vector3r> stretched = {Vector3r(0, 0, 0), Vector3r(Real(2.2), 0, 0)};
+  ParticleState state(stretched, unit_masses(2));
+  const ParticleArrays particles = ParticleArrays::of(state);
+  const Real dt = Real(0.01);  // α̃ = 1e-4 / 1e-4 = 1
+  Real out = -1;
+  xpbd_residuals(particles, batch, 0, 1, dt, &out);
+  EXPECT_NEAR(out, Real(0.1), kResidualTolerance) << "λ = 0: the plain residual";
+  batch.lambda[0] = Real(-0.15);  // C + α̃λ = 0.2 - 0.15
+  xpbd_residuals(particles, batch, 0, 1, dt, &out);
+  EXPECT_NEAR(out, Real(0.025), kResidualTolerance);
+  batch.lambda[0] = Real(-0.2);  // the compliant equilibrium: C = -α̃λ
+  xpbd_residuals(particles, batch, 0, 1, dt, &out);
+  EXPECT_NEAR(out, 0, kResidualTolerance);
+  EXPECT_NEAR(constraint_residual(particles, batch, 0), Real(0.1), kResidualTolerance)
+      << "constraint_residuals ignores λ";
+  batch.compliance[0] = 0;
+  xpbd_residuals(particles, batch, 0, 1, dt, &out);
+  EXPECT_NEAR(out, Real(0.1), kResidualTolerance) << "a hard constraint: the violation";
+}
+
+/// Converging one compliant constraint by repeated XPBD projections drives the XPBD residual
+/// to zero while the violation |C| stays: every XPBD family.
+template <class Batch, class Project>
+void expect_xpbd_residual_converges(Batch batch, std::vector<Vector3r> positions,
+                                    Project&& project, Real compliance) {
+  std::fill(batch.compliance.begin(), batch.compliance.end(), compliance);
+  ParticleState state(positions, unit_masses(positions.size()));
+  const ParticleArrays particles = ParticleArrays::of(state);
+  const ProjectionSettings settings{ConstraintSemantics::compliance, Real(0.01)};
+  for (int i = 0; i < 200; ++i) project(particles, batch, 0, 1, settings);
+  Real xpbd = -1;
+  xpbd_residuals(particles, batch, 0, 1, settings.dt, &xpbd);
+  EXPECT_LT(xpbd, Real(1e-3) * constraint_residual(particles, batch, 0));
+  EXPECT_GT(constraint_residual(particles, batch, 0), Real(1e-3)) << "a compliant constraint stays violated";
+}
+
+TEST(XpbdResidual, VanishesAtTheCompliantSolutionOfEveryXpbdFamily) {
+  const std::vector<Vector3r> rest = rest_tetrahedron();
+  std::vector<Vector3r> squashed = rest;
+  squashed[3] = rest[0] + Real(0.5) * (rest[3] - rest[0]);
+  expect_xpbd_residual_converges(make_volume_constraints({kFirstFour, rest}), squashed,
+                                 project_volume_constraints, Real(1e-4));
+  const std::vector<ParticleIndex> edge = {0, 1};
+  expect_xpbd_residual_converges(make_distance_constraints({edge, rest}),
+                                 {rest[0], rest[1] + (rest[1] - rest[0]), rest[2], rest[3]},
+                                 project_distance_constraints, Real(1e-4));
+  expect_xpbd_residual_converges(
+      make_fem_tetra_constraints({kFirstFour, rest, Real(1e4), Real(0.3), true}), squashed,
+      project_fem_tetra_constraints, Real(1e-3));
+}
+
 // --------------------------------------------------------------------------------- volume
 TEST(VolumeResidual, RelativeChangeOfTheSignedVolume) {
   const std::vector<Vector3r> rest = rest_tetrahedron();

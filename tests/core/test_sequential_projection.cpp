@@ -15,6 +15,7 @@
 
 #include <tessera/core/error.hpp>
 #include <tessera/core/position_based_dynamics.hpp>
+#include <tessera/core/position_based_dynamics_extensions.hpp>
 #include <tessera/core/sequential_projection.hpp>
 #include <tessera/core/xpbd.hpp>
 
@@ -549,6 +550,42 @@ Matrix3r contact_info(const ParticleTetContacts& b, std::size_t c) {
   return info;
 }
 
+/// Tethers: reaches between 0.6 and 1.4 of the rest lengths, so a chain has stretched and
+/// slack ones.
+struct Tether {
+  static constexpr int N = 2;
+  using Batch = TetherConstraints;
+  static constexpr SemanticsSupport kSemantics = SemanticsSupport::pbd_and_xpbd;
+  static constexpr bool kHasLambda = true;
+  static constexpr std::array<int, N> kChainSlot = {0, 1};
+
+  static Points<N> random_shape(Random& r) { return Distance::random_shape(r); }
+  static Batch build(const ConstraintSet<N>& set, const std::vector<Vector3r>& rest,
+                     Random& r) {
+    Batch batch = make_tether_constraints({set.indices, rest});
+    for (std::size_t c = 0; c < set.count; ++c) {
+      batch.max_distance[c] *= uniform(r, 0.6, 1.4);
+      batch.stiffness[c] = random_stiffness(r);
+      batch.compliance[c] = random_compliance(r);
+    }
+    return batch;
+  }
+  static void batched(ParticleArrays p, Batch& b, std::size_t begin, std::size_t end,
+                      const ProjectionSettings& s) {
+    project_tether_constraints(p, b, begin, end, s);
+  }
+  static void solve(Batch& b, std::size_t c, const Points<N>& x, const Masses<N>& w,
+                    const ProjectionSettings& s, Points<N>& corr) {
+    if (s.semantics == ConstraintSemantics::stiffness)
+      PositionBasedDynamicsExtensions::solve_TetherConstraint(
+          x[0], w[0], x[1], w[1], b.max_distance[c], b.stiffness[c], corr[0], corr[1]);
+    else
+      XPBDExtensions::solve_TetherConstraint(x[0], w[0], x[1], w[1], b.max_distance[c],
+                                             b.compliance[c], s.dt, b.lambda[c], corr[0],
+                                             corr[1]);
+  }
+};
+
 struct Contact {
   static constexpr int N = 5;
   using Batch = ParticleTetContacts;
@@ -712,7 +749,7 @@ class SequentialProjection : public ::testing::Test {};
 
 using Families = ::testing::Types<Distance, Dihedral, Volume, IsometricBending, EdgePoint,
                                   TrianglePoint, EdgeEdge, StrainTriangle, StrainTetra,
-                                  FEMTriangle, FEMTetra, Contact>;
+                                  FEMTriangle, FEMTetra, Contact, Tether>;
 
 class FamilyNames {
  public:
@@ -729,6 +766,7 @@ class FamilyNames {
     if (std::is_same_v<F, StrainTetra>) return "StrainTetra";
     if (std::is_same_v<F, FEMTriangle>) return "FEMTriangle";
     if (std::is_same_v<F, FEMTetra>) return "FEMTetra";
+    if (std::is_same_v<F, Tether>) return "Tether";
     return "ParticleTetContact";
   }
 };

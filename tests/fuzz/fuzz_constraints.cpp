@@ -182,6 +182,16 @@ void add_family(Bytes& in, const Decoded& d, ConstraintSets& sets) {
           make_particle_tet_contacts({p, barycentric, normals, in.value()}, state);
       break;
     }
+    case ConstraintFamily::tether: {
+      const auto p = indices(in, 2, n);
+      std::vector<Real> reach;
+      for (std::size_t c = 0; c < p.size() / 2 + (in.byte() % 8 == 0 ? 1 : 0); ++c)
+        reach.push_back(in.value());
+      sets.tether = make_tether_constraints(
+          {p, rest, in.byte() % 2 ? std::span<const Real>(reach) : std::span<const Real>(),
+           in.value(), in.value()});
+      break;
+    }
   }
 }
 

@@ -56,6 +56,16 @@ HWY_INLINE RealLanes load(const Real* values, std::size_t i) {
   return hn::LoadU(RealTag(), values + i);
 }
 
+/// C + α̃λ on the lanes of constraints i .. i+W, α̃ = compliance × inverse_dt2: the XPBD
+/// residual (Macklin, Müller, Chentanez 2016, eq. 11), what a compliant solve drives to zero;
+/// C itself when inverse_dt2 is 0 (and for hard constraints, α = 0).
+HWY_INLINE RealLanes xpbd_residual(RealLanes C, const Real* compliance, const Real* lambda,
+                                   std::size_t i, Real inverse_dt2) {
+  if (inverse_dt2 == 0) return C;
+  const RealLanes alpha_tilde = load(compliance, i) * hn::Set(RealTag(), inverse_dt2);
+  return C + alpha_tilde * load(lambda, i);
+}
+
 /// |C| / |reference|, or |C| where the reference is zero (constraint_residual.cpp's relative).
 HWY_INLINE RealLanes relative(RealLanes C, RealLanes reference) {
   const RealLanes scale = lane_abs(reference);

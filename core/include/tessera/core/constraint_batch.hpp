@@ -90,6 +90,9 @@ inline void check_projection_range(const char* family, std::size_t begin, std::s
 
 namespace detail {
 
+/// 1/dt², the factor from compliance α to α̃ = α/dt² (0 for dt ≤ 0: no compliance term).
+inline Real inverse_squared(Real dt) { return dt > 0 ? Real(1) / (dt * dt) : Real(0); }
+
 /// How project_sequentially takes a batch: by reference where it accumulates a multiplier,
 /// by const reference otherwise.
 template <class Batch>
@@ -126,5 +129,11 @@ void call_batched_kernel(Kernel&& kernel, ParticleArrays particles, Batch& batch
                             const ProjectionSettings& settings = {});                        \
   void constraint_residuals(const ParticleArrays& particles, const Batch& batch,             \
                             std::size_t begin, std::size_t end, Real* out);
+
+/// Declares an XPBD family's xpbd_residuals (constraint_residual.hpp): its residual measure of
+/// C + α̃λ, α̃ = compliance / dt², instead of C.
+#define TESSERA_XPBD_RESIDUAL_ENTRY_POINT(Batch)                                         \
+  void xpbd_residuals(const ParticleArrays& particles, const Batch& batch, std::size_t begin, \
+                      std::size_t end, Real dt, Real* out);
 
 }  // namespace tessera

@@ -13,6 +13,7 @@
 //     project_constraints                   the batched SIMD kernel over [begin, end)
 //     project_sequentially                  the scalar API, one constraint after another
 //     constraint_residuals                  the batched residual (constraint_residual.hpp)
+//     xpbd_residuals                        only with kTraits.xpbd: the same of C + α̃λ
 //     solve_velocity_constraints            only with kTraits.velocity_pass
 //
 // check_family<Batch>() makes forgetting one a compile error: a field left out of both lists,
@@ -39,6 +40,7 @@
 #include <tessera/core/shape_matching_constraints.hpp>
 #include <tessera/core/strain_tetra_constraints.hpp>
 #include <tessera/core/strain_triangle_constraints.hpp>
+#include <tessera/core/tether_constraints.hpp>
 #include <tessera/core/volume_constraints.hpp>
 
 /// X(name, Batch) for every family, in global-id order (a model's constraint ids run through
@@ -57,7 +59,8 @@
   X(fem_triangle, FEMTriangleConstraints)                       \
   X(fem_tetra, FEMTetraConstraints)                             \
   X(shape_matching, ShapeMatchingConstraints)                   \
-  X(particle_tet_contact, ParticleTetContacts)
+  X(particle_tet_contact, ParticleTetContacts)                  \
+  X(tether, TetherConstraints)
 
 namespace tessera {
 
@@ -245,6 +248,9 @@ constexpr bool check_family() {
                 "kTraits.multiplier and the presence of a lambda array disagree");
   static_assert(traits.xpbd == requires(Batch b) { b.compliance; },
                 "kTraits.xpbd and the presence of a compliance array disagree");
+  static_assert(!traits.xpbd || requires(const ParticleArrays& p, const Batch& b, Real* out) {
+    xpbd_residuals(p, b, std::size_t(0), std::size_t(0), Real(0), out);
+  }, "an XPBD family needs xpbd_residuals (TESSERA_XPBD_RESIDUAL_ENTRY_POINT)");
   static_assert(traits.cell == CellShape::none || traits.cell == CellShape::segment ||
                     traits.arity >= (traits.cell == CellShape::triangle ? 3 : 4),
                 "the cell shape needs more slots than the family has");

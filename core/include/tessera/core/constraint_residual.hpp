@@ -30,6 +30,11 @@ namespace tessera {
 // projection kernels run it), written to out[c − begin] for each c. Nothing outside
 // out[0, end − begin) is written. Shape matching (clusters of any size) evaluates its
 // clusters one at a time. Preconditions (not checked): begin ≤ end ≤ batch.size().
+//
+// xpbd_residuals(particles, batch, begin, end, dt, out), one overload per family with an XPBD
+// form (kTraits.xpbd): the same measure of C + α̃λ instead of C, α̃ = compliance / dt² with the
+// batch's compliance and λ (the residual of the equation XPBD solves, Macklin, Müller,
+// Chentanez 2016, eq. 11); equal to constraint_residuals where α = 0 or λ = 0.
 
 /// The residual of constraint c alone: constraint_residuals over [c, c + 1), so the two
 /// cannot drift apart (shape matching has its own overload, which its batched form loops).

@@ -72,5 +72,7 @@ void project_dihedral_constraints(ParticleArrays particles, DihedralConstraints&
 // edge or a zero-area wing) has no defined angle; it reads the formula's value there, φ = 0 for a
 // stencil collapsed to one point (so the residual is φ0), always finite and ≤ π.
 TESSERA_FAMILY_ENTRY_POINTS(DihedralConstraints, project_dihedral_constraints)
+// xpbd_residuals, Dihedral: |C + α̃λ| in radians.
+TESSERA_XPBD_RESIDUAL_ENTRY_POINT(DihedralConstraints)
 
 }  // namespace tessera

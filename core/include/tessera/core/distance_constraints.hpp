@@ -64,5 +64,7 @@ void project_distance_constraints(ParticleArrays particles, DistanceConstraints&
 // constraint_residuals, Distance: relative stretch |‖p0 − p1‖ − l0| / l0 (dimensionless).
 // Coincident particles read 1. (A zero l0, which the builder rejects, would read |‖p0 − p1‖|.)
 TESSERA_FAMILY_ENTRY_POINTS(DistanceConstraints, project_distance_constraints)
+// xpbd_residuals, Distance: |C + α̃λ| / l0.
+TESSERA_XPBD_RESIDUAL_ENTRY_POINT(DistanceConstraints)
 
 }  // namespace tessera

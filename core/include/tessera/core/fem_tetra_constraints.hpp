@@ -84,5 +84,8 @@ void project_fem_tetra_constraints(ParticleArrays particles, FEMTetraConstraints
 // kernel's inversion handling evaluates a clamped one, so a mirrored element reads 0).
 // Dimensionless and independent of the material; collapsed to one point: √3 / 2.
 TESSERA_FAMILY_ENTRY_POINTS(FEMTetraConstraints, project_fem_tetra_constraints)
+// xpbd_residuals, FEM tetrahedron: |C + α̃λ| / sqrt(V0) with the XPBD form's C = sqrt(2 V0 ψ₁(F))
+// (ψ₁ the energy density for E = 1; a strain-sized number, as the Green strain above).
+TESSERA_XPBD_RESIDUAL_ENTRY_POINT(FEMTetraConstraints)
 
 }  // namespace tessera

@@ -84,5 +84,7 @@ void project_isometric_bending_constraints(ParticleArrays particles,
 // stencil reads its own rest curvature (the kernel's C is not 0 there either). A stencil collapsed
 // to one point reads 0.
 TESSERA_FAMILY_ENTRY_POINTS(IsometricBendingConstraints, project_isometric_bending_constraints)
+// xpbd_residuals, Isometric bending: sqrt(2 |C + α̃λ|) (the units of |u|).
+TESSERA_XPBD_RESIDUAL_ENTRY_POINT(IsometricBendingConstraints)
 
 }  // namespace tessera

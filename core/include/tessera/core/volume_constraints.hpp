@@ -72,5 +72,7 @@ void project_volume_constraints(ParticleArrays particles, VolumeConstraints& con
 // kernel; an inverted tetrahedron counts its full signed change (inverting a unit tet reads 2). A
 // flat or collapsed tetrahedron reads 1. (A zero V0, which the builder rejects, would read |V|.)
 TESSERA_FAMILY_ENTRY_POINTS(VolumeConstraints, project_volume_constraints)
+// xpbd_residuals, Volume: |C + α̃λ| / V0.
+TESSERA_XPBD_RESIDUAL_ENTRY_POINT(VolumeConstraints)
 
 }  // namespace tessera

@@ -1,0 +1,115 @@
+// Long-range attachments (long_range_attachments.hpp): a multi-source Dijkstra over the
+// edges' rest lengths (in double, so a long path's length does not drift with float rounding),
+// then one tether per reached movable particle.
+#include <tessera/core/long_range_attachments.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <queue>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <tessera/core/error.hpp>
+
+namespace tessera {
+namespace {
+
+constexpr ParticleIndex kNone = std::numeric_limits<ParticleIndex>::max();
+
+/// The edge graph as CSR: neighbours[offsets[p], offsets[p + 1]) of particle p.
+struct EdgeGraph {
+  std::vector<std::uint32_t> offsets;
+  std::vector<ParticleIndex> neighbours;
+};
+
+EdgeGraph edge_graph(std::span<const ParticleIndex> edges, std::size_t n) {
+  EdgeGraph graph;
+  graph.offsets.assign(n + 1, 0);
+  for (const ParticleIndex p : edges) ++graph.offsets[p + 1];
+  for (std::size_t p = 0; p < n; ++p) graph.offsets[p + 1] += graph.offsets[p];
+  graph.neighbours.resize(edges.size());
+  std::vector<std::uint32_t> next(graph.offsets.begin(), graph.offsets.end() - 1);
+  for (std::size_t e = 0; e + 1 < edges.size(); e += 2) {
+    graph.neighbours[next[edges[e]]++] = edges[e + 1];
+    graph.neighbours[next[edges[e + 1]]++] = edges[e];
+  }
+  return graph;
+}
+
+void check_input(std::span<const Vector3r> rest_positions, std::span<const Real> inverse_masses,
+                 std::span<const ParticleIndex> edges, const LongRangeAttachmentOptions& o) {
+  const std::string context = "long-range attachments: ";
+  if (inverse_masses.size() != rest_positions.size())
+    throw InvalidInput(context + std::to_string(inverse_masses.size()) + " inverse masses for " +
+                       std::to_string(rest_positions.size()) + " particles");
+  if (edges.size() % 2 != 0)
+    throw InvalidInput(context + std::to_string(edges.size()) +
+                       " edge indices is not a whole number of edges (2 each)");
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    if (edges[i] >= rest_positions.size())
+      throw InvalidInput(context + "edge " + std::to_string(i / 2) + ": particle " +
+                         std::to_string(edges[i]) + " is out of range (" +
+                         std::to_string(rest_positions.size()) + " particles)");
+  for (std::size_t p = 0; p < rest_positions.size(); ++p)
+    if (!rest_positions[p].allFinite())
+      throw InvalidInput(context + "rest position of particle " + std::to_string(p) +
+                         " is not finite");
+  if (!(std::isfinite(o.reach_scale) && o.reach_scale > 0))
+    throw InvalidInput(context + "reach scale must be positive and finite");
+}
+
+}  // namespace
+
+TetherConstraints make_long_range_attachments(std::span<const Vector3r> rest_positions,
+                                              std::span<const Real> inverse_masses,
+                                              std::span<const ParticleIndex> edges,
+                                              const LongRangeAttachmentOptions& options) {
+  check_input(rest_positions, inverse_masses, edges, options);
+  const std::size_t n = rest_positions.size();
+  const EdgeGraph graph = edge_graph(edges, n);
+
+  // Dijkstra from every attachment at once; a particle keeps the nearest attachment, and of
+  // equally near ones the smaller number (the order of the queue entries makes it so).
+  std::vector<double> distance(n, std::numeric_limits<double>::infinity());
+  std::vector<ParticleIndex> attachment(n, kNone);
+  using Entry = std::pair<double, ParticleIndex>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
+  for (std::size_t p = 0; p < n; ++p)
+    if (!(inverse_masses[p] > 0) && graph.offsets[p + 1] > graph.offsets[p]) {
+      distance[p] = 0;
+      attachment[p] = ParticleIndex(p);
+      queue.push({0.0, ParticleIndex(p)});
+    }
+  while (!queue.empty()) {
+    const auto [d, p] = queue.top();
+    queue.pop();
+    if (d > distance[p]) continue;
+    for (std::uint32_t k = graph.offsets[p]; k < graph.offsets[p + 1]; ++k) {
+      const ParticleIndex q = graph.neighbours[k];
+      if (!(inverse_masses[q] > 0)) continue;  // an attachment is its own nearest
+      const double through = d + (rest_positions[p] - rest_positions[q]).cast<double>().norm();
+      if (through < distance[q] || (through == distance[q] && attachment[p] < attachment[q])) {
+        const bool improved = through < distance[q];
+        distance[q] = through;
+        attachment[q] = attachment[p];
+        if (improved) queue.push({through, q});
+      }
+    }
+  }
+
+  std::vector<ParticleIndex> pairs;
+  std::vector<Real> reach;
+  for (std::size_t p = 0; p < n; ++p) {
+    if (!(inverse_masses[p] > 0) || attachment[p] == kNone) continue;
+    const Real d = Real(distance[p] * double(options.reach_scale));
+    if (!(d > 0)) continue;  // coincident with its attachment at rest: nothing to hold
+    pairs.insert(pairs.end(), {ParticleIndex(p), attachment[p]});
+    reach.push_back(d);
+  }
+  return make_tether_constraints(
+      {pairs, rest_positions, reach, options.stiffness, options.compliance});
+}
+
+}  // namespace tessera

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <type_traits>
 
 #include <tessera/core/constraint_residual.hpp>
 
@@ -34,40 +35,59 @@ std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
 }
 
 ResidualPartial residual_of_range(const ResidualRange& range, const ConstraintSets& sets,
-                                  const ParticleArrays& particles) {
+                                  const ParticleArrays& particles, Real compliance_dt) {
   ResidualPartial partial;
   Real values[kLongestResidualRange];
   sets.for_each([&](ConstraintFamily family, const auto& batch) {
     if (family != range.family) return;
     // The batched evaluation (SIMD lanes), then the sums in constraint order.
-    constraint_residuals(particles, batch, range.begin, range.end, values);
+    using Batch = std::decay_t<decltype(batch)>;
+    if constexpr (Batch::kTraits.xpbd) {
+      if (compliance_dt > 0)
+        xpbd_residuals(particles, batch, range.begin, range.end, compliance_dt, values);
+      else
+        constraint_residuals(particles, batch, range.begin, range.end, values);
+    } else {
+      constraint_residuals(particles, batch, range.begin, range.end, values);
+    }
     for (std::size_t c = 0; c < std::size_t(range.end - range.begin); ++c) {
       const double r = double(values[c]);
       partial.sum_of_squares += r * r;
-      partial.max = std::max(partial.max, r);
+      if (r > partial.max) {
+        partial.max = r;
+        partial.max_slot = std::uint32_t(range.begin + c);
+      }
     }
   });
   return partial;
 }
 
 Residual combine_residual(std::span<const ResidualRange> ranges,
-                          std::span<const ResidualPartial> partials) {
+                          std::span<const ResidualPartial> partials,
+                          std::array<WorstPlace, kConstraintFamilyCount>& worst) {
   Residual result;
   std::array<double, kConstraintFamilyCount> sums{};
   double total = 0;
+  worst = {};
   for (std::size_t i = 0; i < ranges.size(); ++i) {
     const std::size_t f = std::size_t(ranges[i].family);
     FamilyResidual& family = result.families[f];
+    if (family.constraints == 0 || partials[i].max > family.max) {
+      family.max = partials[i].max;
+      worst[f] = {ranges[i].set, partials[i].max_slot};
+    }
     family.constraints += ranges[i].end - ranges[i].begin;
-    family.max = std::max(family.max, partials[i].max);
     sums[f] += partials[i].sum_of_squares;
   }
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
     FamilyResidual& family = result.families[f];
     if (family.constraints == 0) continue;
     family.rms = std::sqrt(sums[f] / double(family.constraints));
+    if (result.constraints == 0 || family.max > result.max) {
+      result.max = family.max;
+      result.worst_family = ConstraintFamily(f);
+    }
     result.constraints += family.constraints;
-    result.max = std::max(result.max, family.max);
     total += sums[f];
   }
   if (result.constraints != 0) result.rms = std::sqrt(total / double(result.constraints));

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -26,6 +27,15 @@ struct ResidualRange {
 struct ResidualPartial {
   double sum_of_squares = 0;
   double max = 0;
+  /// The slot (in the range's set) of the first constraint whose residual is max.
+  std::uint32_t max_slot = 0;
+};
+
+/// Where a family's largest residual was found: a slot of the coloured batches, the Jacobi
+/// set or the dynamic constraints (the solver turns it into the user's constraint).
+struct WorstPlace {
+  ResidualRange::Set set = ResidualRange::coloured;
+  std::uint32_t slot = 0;
 };
 
 /// The longest range residual_of_range takes (its values live on the stack).
@@ -36,12 +46,16 @@ inline constexpr std::size_t kLongestResidualRange = 2048;
 std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
                                            const ConstraintSets& dynamic, std::size_t chunk);
 
-/// The partial sums of one range, at `particles`.
+/// The partial sums of one range, at `particles`: of the XPBD residual C + α̃λ of the XPBD
+/// families with α̃ = compliance / compliance_dt² when compliance_dt > 0 (compliance
+/// semantics), of C otherwise.
 ResidualPartial residual_of_range(const ResidualRange& range, const ConstraintSets& sets,
-                                  const ParticleArrays& particles);
+                                  const ParticleArrays& particles, Real compliance_dt);
 
-/// Sums the partials (one per range, same order) family by family.
+/// Sums the partials (one per range, same order) family by family; `worst` gets, per family,
+/// where its largest residual was found.
 Residual combine_residual(std::span<const ResidualRange> ranges,
-                          std::span<const ResidualPartial> partials);
+                          std::span<const ResidualPartial> partials,
+                          std::array<WorstPlace, kConstraintFamilyCount>& worst);
 
 }  // namespace tessera::detail

@@ -7,14 +7,16 @@
 //   build_jacobi_set     the Jacobi set and its incidences (jacobi_set.cpp)
 //   build_stages         the mode's stage list (stage.hpp)
 //
-// Mode sequential skips the first three: the model's batches in input order, one block per
-// family, one sequential sweep.
+// Mode sequential lays out greedy groups the same way (no Jacobi set) and sweeps every block
+// in one sequential stage; in input order it skips the first three steps: the model's batches
+// as they are, one block per family.
 #include <tessera/parallel/schedule.hpp>
 
 #include <algorithm>
 #include <limits>
 #include <string>
 
+#include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/core/error.hpp>
 #include <tessera/core/simd.hpp>
 #include <tessera/parallel/threads.hpp>
@@ -66,10 +68,17 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
     family_first_[f + 1] = family_first_[f] + ConstraintIndex(sizes[f]);
     remap_[f].resize(sizes[f]);
   }
+  // Mode sequential sweeps the reference library's groups (solver_mode.hpp): greedy colours,
+  // laid out like any colouring, swept by one sequential stage; or the input order as is.
+  Colouring groups;
   if (options_.mode == SolverMode::sequential) {
-    lay_out_in_input_order(model);
-    build_stages();
-    return;
+    if (options_.sequential_order == SequentialOrder::input) {
+      lay_out_in_input_order(model);
+      build_stages();
+      return;
+    }
+    groups = make_greedy_strategy()->colour(constraint_graph(model), {});
+    colouring = &groups;
   }
   if (colouring == nullptr)
     throw InvalidInput("schedule: mode " + std::string(solver_mode_name(options_.mode)) +
@@ -81,7 +90,8 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
   const std::size_t particle_count = model.particles.size();
   take_particle_order(*colouring, particle_count);
 
-  SourceLists coloured_source, jacobi_source;
+  SourceLists& coloured_source = coloured_source_;
+  SourceLists& jacobi_source = jacobi_source_;
   place_by_colour(*colouring, coloured_source, jacobi_source);
 
   const auto renumber = [&](std::size_t, std::size_t, ParticleIndex p) {
@@ -210,6 +220,14 @@ void Schedule::build_stages() {
     if (has_velocity_pass(jacobi_.blocks))
       velocity_stages_.push_back({StageKind::velocity_pass, StageSet::jacobi, first, last});
   }
+}
+
+ConstraintIndex Schedule::user_constraint(ConstraintFamily family, bool in_jacobi_set,
+                                          std::uint32_t slot) const {
+  const std::size_t f = std::size_t(family);
+  const auto& source = in_jacobi_set ? jacobi_source_[f] : coloured_source_[f];
+  const std::uint32_t local = source.empty() ? slot : source[slot];
+  return family_first_[f] + local;
 }
 
 ConstraintLocation Schedule::locate(ConstraintIndex user_constraint) const {

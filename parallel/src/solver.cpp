@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include <oneapi/tbb/blocked_range.h>
@@ -50,6 +51,9 @@ void check_settings(const SolverSettings& s) {
                        std::to_string(s.jacobi_relaxation) + ")");
   if (s.block_size == 0) throw InvalidInput("solver settings: block size must be at least 1");
   if (!s.gravity.allFinite()) throw InvalidInput("solver settings: gravity is not finite");
+  if (!(s.divergence_rms > 0))
+    throw InvalidInput("solver settings: divergence bound must be positive (got " +
+                       std::to_string(s.divergence_rms) + "; infinity turns the check off)");
 }
 
 /// The model's particles renumbered into the schedule's order.
@@ -124,11 +128,13 @@ constexpr auto kVelocityBlock = table<VelocityBlock, VelocityEntry>(kFamilies);
 Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& settings)
     : settings_(settings) {
   check_settings(settings_);
+  projection_dt_ = settings_.time_step / Real(settings_.substeps);
   const auto start = Clock::now();
   const std::size_t threads =
       settings_.mode == SolverMode::sequential ? 1 : worker_threads(settings_.threads);
   schedule_ = Schedule(model, &colouring,
-                       {settings_.mode, settings_.block_size, settings_.hybrid_threshold, threads});
+                       {settings_.mode, settings_.block_size, settings_.hybrid_threshold, threads,
+                        settings_.sequential_order});
   state_ = scheduled_particles(model.particles, schedule_);
   jacobi_work_.bind(schedule_.jacobi());
   build_stages();
@@ -328,8 +334,12 @@ void Solver::iterate(const ProjectionSettings& projection) {
   for (const Stage& stage : stages_) run_stage(stage, projection);
 }
 
+bool Solver::guards_divergence() const {
+  return settings_.report_residuals && std::isfinite(settings_.divergence_rms);
+}
+
 void Solver::save_state() {
-  if (!settings_.check_finite) return;
+  if (!settings_.check_finite && !guards_divergence()) return;
   AlignedVector<Real>* arrays[6] = {&state_.x, &state_.y, &state_.z,
                                     &state_.velocity_x, &state_.velocity_y, &state_.velocity_z};
   for (std::size_t a = 0; a < 6; ++a) saved_[a].assign(arrays[a]->begin(), arrays[a]->end());
@@ -356,11 +366,34 @@ void Solver::restore_if_not_finite(const char* operation) {
   const auto bad = std::min_element(first_bad.begin(), first_bad.end());
   if (bad == first_bad.end() || *bad == n) return;
   const ParticleIndex particle = schedule_.user_particle(ParticleIndex(*bad));
-  for (std::size_t a = 0; a < 6; ++a) std::copy(saved_[a].begin(), saved_[a].end(), arrays[a]->begin());
+  restore_saved_state();
   throw NumericalFailure(std::string("solver: ") + operation + " made particle " +
                          std::to_string(particle) +
                          " non-finite; positions and velocities are restored to before it "
                          "(check the time step, compliance and velocities)");
+}
+
+void Solver::restore_saved_state() {
+  AlignedVector<Real>* arrays[6] = {&state_.x, &state_.y, &state_.z,
+                                    &state_.velocity_x, &state_.velocity_y, &state_.velocity_z};
+  for (std::size_t a = 0; a < 6; ++a) std::copy(saved_[a].begin(), saved_[a].end(), arrays[a]->begin());
+}
+
+void Solver::restore_if_diverged(const char* operation) {
+  if (!guards_divergence()) return;
+  const Residual& after = report_.residual_after;
+  if (!(after.rms > double(settings_.divergence_rms))) return;
+  const FamilyResidual& worst = after.of(after.worst_family);
+  restore_saved_state();
+  char numbers[160];
+  std::snprintf(numbers, sizeof numbers, "residual RMS %.3g exceeds the bound %.3g; the largest, %.3g, is ",
+                after.rms, double(settings_.divergence_rms), worst.max);
+  throw NumericalFailure(std::string("solver: ") + operation + " diverged: " + numbers +
+                         std::string(family_name(after.worst_family)) +
+                         (worst.worst_is_dynamic ? " dynamic constraint " : " constraint ") +
+                         std::to_string(worst.worst) +
+                         "; positions and velocities are restored to before it (more substeps or "
+                         "iterations, a smaller time step, or SolverSettings::divergence_rms)");
 }
 
 void Solver::project(std::size_t iterations, Real dt) {
@@ -368,6 +401,7 @@ void Solver::project(std::size_t iterations, Real dt) {
     throw InvalidInput("solver: projection time step must be positive and finite (got " +
                        std::to_string(dt) + ")");
   const ProjectionSettings projection{settings_.semantics, dt};
+  projection_dt_ = dt;
   const auto start = Clock::now();
   save_state();
   for (std::size_t it = 0; it < iterations; ++it) iterate(projection);
@@ -425,6 +459,7 @@ void Solver::step() {
   const auto start = Clock::now();
   const Real h = settings_.time_step / Real(settings_.substeps);
   const ProjectionSettings projection{settings_.semantics, h};
+  projection_dt_ = h;
   report_.history.clear();
   save_state();
   for (std::size_t substep = 0; substep < settings_.substeps; ++substep) {
@@ -449,7 +484,9 @@ void Solver::step() {
     for (const Stage& stage : velocity_stages_) run_stage(stage, projection);
     if (last && settings_.report_residuals) report_.residual_after = residual();
   }
-  restore_if_not_finite(("step " + std::to_string(statistics_.steps + 1)).c_str());
+  const std::string operation = "step " + std::to_string(statistics_.steps + 1);
+  restore_if_not_finite(operation.c_str());
+  restore_if_diverged(operation.c_str());
   ++statistics_.steps;
   statistics_.seconds_stepping += seconds_since(start);
 }
@@ -458,6 +495,9 @@ Residual Solver::residual() {
   const auto ranges = detail::residual_ranges(schedule_, dynamic_.constraints, kResidualChunk);
   std::vector<detail::ResidualPartial> partials(ranges.size());
   const ParticleArrays particles = ParticleArrays::of(state_);
+  // XPBD: the residual of the equations the last projections solved, C + α̃λ at their dt.
+  const Real compliance_dt =
+      settings_.semantics == ConstraintSemantics::compliance ? projection_dt_ : Real(0);
   parallel_chunks(ranges.size(), 1, [&](std::size_t first, std::size_t last) {
     for (std::size_t k = first; k < last; ++k) {
       const auto& range = ranges[k];
@@ -466,10 +506,27 @@ Residual Solver::residual() {
                                    : range.set == detail::ResidualRange::jacobi
                                        ? schedule_.jacobi().constraints
                                        : dynamic_.constraints;
-      partials[k] = detail::residual_of_range(range, sets, particles);
+      partials[k] = detail::residual_of_range(range, sets, particles, compliance_dt);
     }
   });
-  return detail::combine_residual(ranges, partials);
+  std::array<detail::WorstPlace, kConstraintFamilyCount> worst;
+  Residual result = detail::combine_residual(ranges, partials, worst);
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+    FamilyResidual& family = result.families[f];
+    if (family.constraints == 0) continue;
+    family.worst_is_dynamic = worst[f].set == detail::ResidualRange::dynamic;
+    family.worst = family.worst_is_dynamic
+                       ? dynamic_user_index(ConstraintFamily(f), worst[f].slot)
+                       : schedule_.user_constraint(ConstraintFamily(f),
+                                                   worst[f].set == detail::ResidualRange::jacobi,
+                                                   worst[f].slot);
+  }
+  return result;
+}
+
+std::size_t Solver::dynamic_user_index(ConstraintFamily family, std::uint32_t slot) const {
+  const auto& source = dynamic_source_[std::size_t(family)];
+  return source.empty() ? slot : source[slot];
 }
 
 void Solver::check_particle(ParticleIndex particle) const {
@@ -551,13 +608,14 @@ void Solver::set_dynamic_constraints(ConstraintSets constraints) {
   if (settings_.mode == SolverMode::sequential) {
     // Swept as given, family by family (the user's numbering is the solver's).
     dynamic_ = JacobiSet();
+    dynamic_source_ = {};
     const auto sizes = constraints.sizes();
     for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
       if (sizes[f] != 0) dynamic_.blocks.push_back({ConstraintFamily(f), 0, std::uint32_t(sizes[f])});
     dynamic_.constraints = std::move(constraints);
     dynamic_.constraint_count = dynamic_count_;
   } else {
-    std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> all;
+    auto& all = dynamic_source_;
     const auto sizes = constraints.sizes();
     for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
       all[f].resize(sizes[f]);

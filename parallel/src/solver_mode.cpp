@@ -1,4 +1,4 @@
-// Solver mode names (solver_mode.hpp).
+// Solver mode and sequential order names (solver_mode.hpp).
 #include <tessera/parallel/solver_mode.hpp>
 
 #include <string>
@@ -24,6 +24,21 @@ SolverMode parse_solver_mode(std::string_view name) {
     known += (known.empty() ? "" : ", ") + std::string(solver_mode_name(mode));
   }
   throw InvalidInput("unknown solver mode '" + std::string(name) + "' (known: " + known + ")");
+}
+
+std::string_view sequential_order_name(SequentialOrder order) {
+  switch (order) {
+    case SequentialOrder::groups: return "groups";
+    case SequentialOrder::input: return "input";
+  }
+  return "unknown";
+}
+
+SequentialOrder parse_sequential_order(std::string_view name) {
+  for (const SequentialOrder order : {SequentialOrder::groups, SequentialOrder::input})
+    if (sequential_order_name(order) == name) return order;
+  throw InvalidInput("unknown sequential order '" + std::string(name) +
+                     "' (known: groups, input)");
 }
 
 }  // namespace tessera

@@ -243,14 +243,31 @@ TEST(Schedule, HybridSendsTheSmallColoursToTheJacobiSet) {
   check_layout(model, colouring, schedule);
 }
 
-TEST(Schedule, SequentialKeepsTheModelAsItIs) {
+TEST(Schedule, SequentialInInputOrderKeepsTheModelAsItIs) {
   const Model model = test::cloth_model(6, 5);
-  const Schedule schedule(model, nullptr, {SolverMode::sequential});
+  ScheduleOptions options{SolverMode::sequential};
+  options.sequential_order = SequentialOrder::input;
+  const Schedule schedule(model, nullptr, options);
   EXPECT_EQ(schedule.phase_count(), 0u);
   for (ConstraintIndex id = 0; id < model.constraints.size(); ++id) {
     const ConstraintLocation where = schedule.locate(id);
     EXPECT_FALSE(where.in_jacobi_set);
     EXPECT_EQ(where.slot, id - model.constraint_id(where.family, 0));
+    EXPECT_EQ(schedule.user_constraint(where.family, false, where.slot), id);
+  }
+}
+
+TEST(Schedule, SequentialInGroupsLaysOutTheGreedyColoursAndMapsBack) {
+  const Model model = test::cloth_model(6, 5);
+  const Schedule schedule(model, nullptr, {SolverMode::sequential});
+  EXPECT_EQ(schedule.phase_count(), test::colour_model(model, "greedy").colour_count());
+  ASSERT_EQ(schedule.iteration_stages().size(), 1u) << "one sequential sweep over every group";
+  EXPECT_EQ(schedule.iteration_stages()[0].kind, StageKind::sequential_sweep);
+  EXPECT_EQ(schedule.iteration_stages()[0].last_block, schedule.blocks().size());
+  for (ConstraintIndex id = 0; id < model.constraints.size(); ++id) {
+    const ConstraintLocation where = schedule.locate(id);
+    EXPECT_FALSE(where.in_jacobi_set);
+    EXPECT_EQ(schedule.user_constraint(where.family, false, where.slot), id);
   }
 }
 

@@ -54,6 +54,8 @@ struct ScheduleOptions {
   /// it has fewer than 4 per thread of block_size. Any value gives the same results; 0 means
   /// every hardware thread (worker_threads).
   std::size_t threads = 1;
+  /// Mode sequential: the order of the sweep.
+  SequentialOrder sequential_order = SequentialOrder::groups;
 };
 
 /// Constraints [begin, end) of one family's scheduled batch: one unit of parallel work.
@@ -107,7 +109,7 @@ class Schedule {
   Schedule() = default;
   /// Lays out `model`'s constraints. colouring must colour constraint_graph(model) (same
   /// constraint count; InvalidInput otherwise) unless options.mode is sequential, where it is
-  /// ignored and may be null.
+  /// ignored and may be null (the groups order colours the graph itself, greedily).
   Schedule(const Model& model, const Colouring* colouring, const ScheduleOptions& options);
 
   SolverMode mode() const { return options_.mode; }
@@ -121,10 +123,12 @@ class Schedule {
   /// family range.
   std::span<const ScheduleBlock> blocks() const { return blocks_; }
 
-  /// The coloured batches (mode sequential: the model's batches, unchanged).
+  /// The coloured batches (mode sequential: laid out group by group, or the model's batches
+  /// unchanged in input order).
   ConstraintSets& coloured() { return coloured_; }
   const ConstraintSets& coloured() const { return coloured_; }
-  /// One Gauss–Seidel phase per coloured colour, in colouring order.
+  /// One Gauss–Seidel phase per coloured colour, in colouring order (mode sequential, groups
+  /// order: one per group, swept one after another by the one sequential stage).
   std::size_t phase_count() const { return phase_offsets_.empty() ? 0 : phase_offsets_.size() - 1; }
   std::span<const ScheduleBlock> phase_blocks(std::size_t phase) const {
     return {blocks_.data() + phase_offsets_[phase], blocks_.data() + phase_offsets_[phase + 1]};
@@ -158,6 +162,10 @@ class Schedule {
   }
   /// Where the user's constraint (global id, see Model) was placed.
   ConstraintLocation locate(ConstraintIndex user_constraint) const;
+  /// The other way: the global id of the constraint in a slot (a real one, not padding) of
+  /// the coloured batches or of the Jacobi set.
+  ConstraintIndex user_constraint(ConstraintFamily family, bool in_jacobi_set,
+                                  std::uint32_t slot) const;
 
  private:
   /// Per family, the model's constraint that each scheduled slot holds (or a padding mark).
@@ -176,6 +184,8 @@ class Schedule {
   JacobiSet jacobi_;
   std::vector<ParticleIndex> new_to_old_, old_to_new_;
   std::array<std::vector<ConstraintSlot>, kConstraintFamilyCount> remap_;
+  /// Its inverse: per family, the model's constraint in each slot (empty: the input order).
+  SourceLists coloured_source_, jacobi_source_;
   /// The global id of each family's first constraint (and the total, last).
   std::array<ConstraintIndex, kConstraintFamilyCount + 1> family_first_{};
   std::vector<Stage> iteration_stages_, velocity_stages_;

@@ -7,7 +7,8 @@
 //       gs:     for each colour phase: parallel_for over its blocks → batched SIMD kernel
 //       jacobi: all blocks at once into incidences → per-particle averaged sum
 //       hybrid: the gs phases, then one Jacobi phase for the small colours
-//       sequential: every constraint in input order through the scalar API, one thread
+//       sequential: every constraint through the scalar API, one thread, group after group
+//                   (the reference library's order) or in input order
 //     v = (x − x_prev)/h · max(0, 1 − damping·h)
 //     velocity passes (families with a velocity solve, e.g. particle–tet contact friction)
 //
@@ -79,6 +80,16 @@ struct SolverSettings {
   /// one is not, restore the state from before and throw NumericalFailure. Costs a copy and
   /// a scan of the particle arrays per call (not per iteration).
   bool check_finite = true;
+  /// Divergence is a failure, not a result: a step whose residual after its last substep
+  /// (report_residuals; without it nothing is checked) has an RMS above this bound restores
+  /// the state from before and throws NumericalFailure naming the family and constraint with
+  /// the largest residual. The residuals are relative (10 is constraints off by 1000 % on
+  /// average), so no physical state comes near the default; free fall has none. Positive;
+  /// infinity turns the check off.
+  Real divergence_rms = 10;
+  /// Mode sequential: the reference library's greedy groups one after another (default) or
+  /// the input order (solver_mode.hpp says which is which and why groups is the default).
+  SequentialOrder sequential_order = SequentialOrder::groups;
 };
 
 /// What the last step() measured.
@@ -122,7 +133,8 @@ class Solver {
   Solver& operator=(Solver&&) noexcept;
 
   /// One time step of settings().time_step, in settings().substeps substeps. Throws
-  /// NumericalFailure (state restored) if it produced a non-finite value (check_finite).
+  /// NumericalFailure (state restored) if it produced a non-finite value (check_finite) or
+  /// diverged (divergence_rms).
   void step();
   /// `iterations` projection sweeps at the current positions, with no time integration
   /// (λ kept from before; call reset_lambdas() first for a fresh XPBD solve). For tests,
@@ -130,7 +142,11 @@ class Solver {
   void project(std::size_t iterations, Real dt);
   void reset_lambdas();
 
-  /// The normalised constraint violation now (see residual.hpp).
+  /// The normalised residual now (see residual.hpp): under compliance semantics, the XPBD
+  /// residual |C + α̃λ| of the families with an XPBD form (Macklin et al. 2016, eq. 11: what
+  /// the compliant solve drives to zero, α̃ = α / dt² at the dt of the last step's substeps
+  /// or the last project()), which is the violation |C| itself for a hard constraint (α = 0)
+  /// and right after a λ reset; |C| for the others and under stiffness semantics.
   Residual residual();
 
   const StepReport& last_step() const { return report_; }
@@ -168,9 +184,14 @@ class Solver {
 
  private:
   void check_particle(ParticleIndex particle) const;
+  std::size_t dynamic_user_index(ConstraintFamily family, std::uint32_t slot) const;
   /// check_finite: snapshot before an operation, and the scan after it (restores and throws).
   void save_state();
   void restore_if_not_finite(const char* operation);
+  /// The scan after a step: restores and throws when its residual_after is beyond the bound.
+  void restore_if_diverged(const char* operation);
+  bool guards_divergence() const;
+  void restore_saved_state();
   void integrate(Real h);
   void update_velocities(Real h);
   /// The corrected positions of a Jacobi set's incidences.
@@ -200,8 +221,14 @@ class Solver {
   JacobiWork jacobi_work_;
   JacobiSet dynamic_;
   JacobiWork dynamic_work_;
+  /// Per family, the dynamic constraint (the caller's index) in each slot of dynamic_ (empty:
+  /// the slots are the caller's order).
+  std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> dynamic_source_;
   std::vector<Stage> stages_, velocity_stages_;
   std::size_t dynamic_count_ = 0;
+  /// The time step of the last projections (step: the substep; project: its dt), which the
+  /// XPBD residual C + α̃λ is measured at.
+  Real projection_dt_ = 0;
   /// Positions and velocities from before the current step() or project() (check_finite),
   /// and the λ arrays are not restored (they are reset at the next step).
   std::array<AlignedVector<Real>, 6> saved_;

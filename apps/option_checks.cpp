@@ -40,4 +40,17 @@ CLI::Validator finite_number_above(double low, bool low_inclusive, const std::st
       "NUMBER");
 }
 
+CLI::Validator positive_number_or_inf() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        char* end = nullptr;
+        errno = 0;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = end != text.c_str() && *end == '\0' && errno == 0 && !std::isnan(value);
+        if (!number || !(value > 0)) return "must be a number above 0 or inf, not '" + text + "'";
+        return {};
+      },
+      "NUMBER|inf");
+}
+
 }  // namespace tessera::cli

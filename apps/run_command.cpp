@@ -43,6 +43,8 @@ io::SimulationSettings simulation_of(const io::SceneDescription& scene, const Ru
   if (options.velocity_damping) simulation.velocity_damping = Real(*options.velocity_damping);
   if (options.strategy) simulation.strategy = *options.strategy;
   if (options.mode) simulation.mode = *options.mode;
+  if (options.sequential_order) simulation.sequential_order = *options.sequential_order;
+  if (options.divergence_rms) simulation.divergence_rms = Real(*options.divergence_rms);
   return simulation;
 }
 
@@ -67,6 +69,13 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
   command->add_option("--strategy", options.strategy,
                       "colouring strategy (default stencil; `tessera info` lists them)");
   command->add_option("--mode", options.mode, "gs, jacobi, hybrid or sequential (default gs)");
+  command->add_option("--sequential-order", options.sequential_order,
+                      "mode sequential: groups (the reference library's greedy groups one after "
+                      "another, default) or input");
+  command->add_option("--divergence-rms", options.divergence_rms,
+                      "a step that ends with an RMS residual above this fails (default 10; inf "
+                      "turns the check off)")
+      ->check(positive_number_or_inf());
   command->add_flag("--balance", options.balance, "run the colouring's balance pass");
   command->add_option("--out", options.out,
                       "write every frame as DIR/frame_NNNNN.vtu plus DIR/frames.pvd (DIR is "
@@ -154,6 +163,13 @@ int run_command(const RunOptions& options) {
   summary.add("residual_rms_initial", initial.rms);
   summary.add("residual_rms_final", final.rms);
   summary.add("residual_max_final", final.max);
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+    const FamilyResidual& family = final.families[f];
+    if (family.constraints == 0) continue;
+    const std::string name(family_name(ConstraintFamily(f)));
+    summary.add("residual_" + name + "_rms_final", family.rms);
+    summary.add("residual_" + name + "_max_final", family.max);
+  }
   summary.add("state_hash", state_hash(solver.positions()));
   if (output) {
     summary.add("output", output->folder().string());

@@ -37,6 +37,9 @@ void add_scene_options(CLI::App& command, SceneOptions& options) {
                      "tetrahedral meshes: fem_tetra, strain_tetra or volume_and_distance");
   command.add_option("--pins", options.pins,
                      "default, none, lowest-x|y|z or highest-x|y|z");
+  command.add_option("--tethers", options.tethers,
+                     "auto (default: every movable particle tethered to its nearest pin along "
+                     "the mesh) or none");
 }
 
 io::SceneDescription describe_scene(const SceneOptions& options) {
@@ -52,6 +55,9 @@ io::SceneDescription describe_scene(const SceneOptions& options) {
       options.solid_material ? std::optional(choose<io::SolidMaterial>(
                                    "--solid-material", *options.solid_material, io::kSolidMaterialNames))
                              : std::nullopt;
+  const auto tethers = options.tethers ? std::optional(choose<io::TetherRule>(
+                                             "--tethers", *options.tethers, io::kTetherRuleNames))
+                                       : std::nullopt;
   std::optional<io::PinRule> pins;
   if (options.pins) {
     try {
@@ -65,6 +71,7 @@ io::SceneDescription describe_scene(const SceneOptions& options) {
   if (bending) description.shell.bending = *bending;
   if (solid_material) description.solid.material = *solid_material;
   if (pins) description.pins = *pins;
+  if (tethers) description.tethers = *tethers;
   return description;
 }
 

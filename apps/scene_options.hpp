@@ -21,9 +21,11 @@ struct SceneOptions {
   std::optional<std::string> bending;
   std::optional<std::string> solid_material;
   std::optional<std::string> pins;
+  std::optional<std::string> tethers;
 };
 
-/// Adds SCENE and --shell-material, --bending, --solid-material, --pins to `command`.
+/// Adds SCENE and --shell-material, --bending, --solid-material, --pins, --tethers to
+/// `command`.
 void add_scene_options(CLI::App& command, SceneOptions& options);
 
 /// The scene named by the options, the overrides applied. Throws InvalidInput.

@@ -12,6 +12,8 @@ SolverSettings solver_settings(const io::SimulationSettings& simulation) {
   settings.iterations = simulation.iterations;
   settings.gravity = simulation.gravity;
   settings.velocity_damping = simulation.velocity_damping;
+  settings.sequential_order = parse_sequential_order(simulation.sequential_order);
+  settings.divergence_rms = simulation.divergence_rms;
   return settings;
 }
 

@@ -3,6 +3,7 @@
 #include "summary.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace tessera::cli {
@@ -15,6 +16,13 @@ std::string Summary::text(const nlohmann::ordered_json& value) {
     return number;
   }
   return value.dump();
+}
+
+void Summary::add(const std::string& key, double value) {
+  if (std::isfinite(value))
+    json_[key] = value;
+  else
+    json_[key] = std::isnan(value) ? "nan" : value > 0 ? "inf" : "-inf";
 }
 
 void Summary::print(std::ostream& out, bool as_json) const {

@@ -17,6 +17,9 @@ class Summary {
   void add(const std::string& key, const Value& value) {
     json_[key] = value;
   }
+  /// A number; one that is not finite is written as the string "inf", "-inf" or "nan" (JSON
+  /// has no such numbers and would print null).
+  void add(const std::string& key, double value);
   const nlohmann::ordered_json& json() const { return json_; }
 
   /// JSON: one line. Text: one line per key, values aligned; numbers with 6 significant digits.

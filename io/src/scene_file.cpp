@@ -209,8 +209,10 @@ PinRule read_pins(const ObjectReader& scene, const Json& value) {
 SceneDescription describe(const Json& json, const std::string& name,
                           const std::filesystem::path& base) {
   const ObjectReader reader(json, name, "");
-  reader.only({"name", "generator", "mesh", "pins", "shell", "solid", "gravity", "time_step",
-               "substeps", "iterations", "frames", "velocity_damping", "strategy", "mode",
+  reader.only({"name", "generator", "mesh", "pins", "tethers", "tether_compliance",
+               "tether_reach_scale", "shell",
+               "solid", "gravity", "time_step", "substeps", "iterations", "frames",
+               "velocity_damping", "strategy", "mode", "sequential_order", "divergence_rms",
                "threads"});
   const Json* generator = reader.find("generator");
   const Json* mesh = reader.find("mesh");
@@ -242,6 +244,11 @@ SceneDescription describe(const Json& json, const std::string& name,
   }
   reader.read_string("name", description.name);
   if (const Json* pins = reader.find("pins")) description.pins = read_pins(reader, *pins);
+  std::size_t tethers = 0;
+  if (reader.read_choice("tethers", kTetherRuleNames, tethers))
+    description.tethers = TetherRule(tethers);
+  reader.read_real("tether_compliance", description.tether_compliance, 0, true);
+  reader.read_real("tether_reach_scale", description.tether_reach_scale, 1, true);
   if (const Json* shell = reader.find("shell")) read_shell(reader, *shell, description.shell);
   if (const Json* solid = reader.find("solid")) read_solid(reader, *solid, description.solid);
 
@@ -262,6 +269,8 @@ SceneDescription describe(const Json& json, const std::string& name,
   reader.read_real("velocity_damping", simulation.velocity_damping, 0, true);
   reader.read_string("strategy", simulation.strategy);
   reader.read_string("mode", simulation.mode);
+  reader.read_string("sequential_order", simulation.sequential_order);
+  reader.read_real("divergence_rms", simulation.divergence_rms, 0, false);
   reader.read_count("threads", simulation.threads, 0);
   return description;
 }

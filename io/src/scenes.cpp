@@ -22,6 +22,7 @@
 #include <utility>
 
 #include <tessera/core/error.hpp>
+#include <tessera/core/long_range_attachments.hpp>
 
 namespace tessera::io {
 namespace {
@@ -382,15 +383,16 @@ PinnedMesh bar_mesh(const std::array<std::size_t, 3>& cells) {
 
 /// The pins a rule picks among `positions`, or `defaults` for scene_default.
 std::vector<VertexIndex> pins_of(const PinRule& rule, std::span<const Vector3r> positions,
-                                 std::vector<VertexIndex> defaults) {
+                                 std::vector<VertexIndex> defaults,
+                                 Real band = kExtremeVertexBand) {
   switch (rule.kind) {
     case PinRule::Kind::scene_default: return defaults;
     case PinRule::Kind::none: return {};
-    case PinRule::Kind::lowest: return lowest_vertices(positions, rule.axis);
+    case PinRule::Kind::lowest: return lowest_vertices(positions, rule.axis, band);
     case PinRule::Kind::highest: {
       std::vector<Vector3r> mirrored(positions.begin(), positions.end());
       for (Vector3r& p : mirrored) p = -p;
-      return lowest_vertices(mirrored, rule.axis);
+      return lowest_vertices(mirrored, rule.axis, band);
     }
     case PinRule::Kind::list:
       for (const VertexIndex v : rule.vertices)
@@ -438,7 +440,8 @@ Model make_model(const Mesh& mesh, std::span<const VertexIndex> pinned, const Sh
                      std::to_string(mesh.vertex_count()) + " vertices)");
 }
 
-std::vector<VertexIndex> lowest_vertices(std::span<const Vector3r> positions, std::size_t axis) {
+std::vector<VertexIndex> lowest_vertices(std::span<const Vector3r> positions, std::size_t axis,
+                                         Real band) {
   if (axis > 2)
     throw InvalidInput("lowest_vertices: axis " + std::to_string(axis) +
                        " is not 0 (x), 1 (y) or 2 (z)");
@@ -452,7 +455,9 @@ std::vector<VertexIndex> lowest_vertices(std::span<const Vector3r> positions, st
     low = low.cwiseMin(positions[v]);
     high = high.cwiseMax(positions[v]);
   }
-  const Real tolerance = Real(1e-6) * (high - low).norm();
+  if (!(std::isfinite(band) && band >= 0))
+    throw InvalidInput("lowest_vertices: band must be >= 0 and finite");
+  const Real tolerance = band * (high - low).norm();
   const auto axis_index = static_cast<Eigen::Index>(axis);
   std::vector<VertexIndex> lowest;
   for (std::size_t v = 0; v < positions.size(); ++v)
@@ -542,7 +547,7 @@ Scene build_scene(const SceneDescription& description) {
         throw InvalidInput(description.mesh_file.string() + ": the mesh has no triangles and no tetrahedra");
       PinRule rule;
       rule.kind = mesh.tetrahedra.empty() ? PinRule::Kind::highest : PinRule::Kind::lowest;
-      default_pins = pins_of(rule, mesh.positions, {});
+      default_pins = pins_of(rule, mesh.positions, {}, kDefaultPinPatch);
       break;
     }
   }
@@ -554,6 +559,17 @@ Scene build_scene(const SceneDescription& description) {
   } else {
     scene.model = make_shell(mesh.positions, mesh.triangles, scene.pinned, description.shell);
     scene.surface_triangles = mesh.triangles;
+  }
+  if (description.tethers == TetherRule::automatic && !scene.pinned.empty()) {
+    const bool solid = !mesh.tetrahedra.empty();
+    const std::vector<VertexIndex> edges =
+        unique_edges(solid ? mesh.tetrahedra : mesh.triangles, solid ? 4 : 3, mesh.vertex_count());
+    const ParticleState& particles = scene.model.particles;
+    scene.model.constraints.tether = make_long_range_attachments(
+        mesh.positions,
+        std::span(particles.inverse_mass.data(), particles.size()), edges,
+        {.reach_scale = description.tether_reach_scale,
+         .compliance = description.tether_compliance});
   }
   return scene;
 }

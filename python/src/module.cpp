@@ -121,6 +121,8 @@ py::dict simulation_dict(const io::SimulationSettings& s) {
   d["velocity_damping"] = double(s.velocity_damping);
   d["strategy"] = s.strategy;
   d["mode"] = s.mode;
+  d["sequential_order"] = s.sequential_order;
+  d["divergence_rms"] = double(s.divergence_rms);
   d["threads"] = s.threads;
   return d;
 }
@@ -291,7 +293,8 @@ PYBIND11_MODULE(_tessera, m) {
       })
       .def_property_readonly("simulation", [](const io::Scene& s) { return simulation_dict(s.description.simulation); },
                              "The scene's settings: gravity, time_step, substeps, iterations, frames,\n"
-                             "velocity_damping, strategy, mode, threads.")
+                             "velocity_damping, strategy, mode, sequential_order, divergence_rms,\n"
+                             "threads.")
       .def(
           "solver_settings",
           [](const io::Scene& s) {
@@ -305,6 +308,8 @@ PYBIND11_MODULE(_tessera, m) {
             d["gravity"] = py::make_tuple(double(sim.gravity.x()), double(sim.gravity.y()),
                                           double(sim.gravity.z()));
             d["velocity_damping"] = double(sim.velocity_damping);
+            d["sequential_order"] = sim.sequential_order;
+            d["divergence_rms"] = double(sim.divergence_rms);
             return d;
           },
           "The keyword arguments of tessera.Solver that run this scene as `tessera run` does.")

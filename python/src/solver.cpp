@@ -77,7 +77,8 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
                              std::size_t iterations, const py::object& gravity,
                              double velocity_damping, double jacobi_relaxation,
                              std::size_t block_size, std::size_t hybrid_threshold,
-                             bool report_residuals, bool record_convergence, bool check_finite) {
+                             bool report_residuals, bool record_convergence, bool check_finite,
+                             double divergence_rms, const std::string& sequential_order) {
   SolverSettings s;
   s.mode = parse_solver_mode(mode);
   s.threads = threads;
@@ -100,6 +101,8 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
   s.report_residuals = report_residuals;
   s.record_convergence = record_convergence;
   s.check_finite = check_finite;
+  s.divergence_rms = Real(divergence_rms);
+  s.sequential_order = parse_sequential_order(sequential_order);
   return s;
 }
 
@@ -118,11 +121,13 @@ void bind_solver(py::module_& m) {
                        std::size_t substeps, std::size_t iterations, const py::object& gravity,
                        double velocity_damping, double jacobi_relaxation, std::size_t block_size,
                        std::size_t hybrid_threshold, bool report_residuals,
-                       bool record_convergence, bool check_finite) {
+                       bool record_convergence, bool check_finite, double divergence_rms,
+                       const std::string& sequential_order) {
              const SolverSettings settings = make_settings(
                  mode, threads, semantics, time_step, substeps, iterations, gravity,
                  velocity_damping, jacobi_relaxation, block_size, hybrid_threshold,
-                 report_residuals, record_convergence, check_finite);
+                 report_residuals, record_convergence, check_finite, divergence_rms,
+                 sequential_order);
              if (settings.mode == SolverMode::sequential && !colouring) return Solver(model, settings);
              if (!colouring)
                throw InvalidInput("solver: mode " + mode +
@@ -143,7 +148,8 @@ void bind_solver(py::module_& m) {
            py::arg("block_size") = kDefaultBlockSize,
            py::arg("hybrid_threshold") = kDefaultHybridThreshold,
            py::arg("report_residuals") = true, py::arg("record_convergence") = false,
-           py::arg("check_finite") = true)
+           py::arg("check_finite") = true, py::arg("divergence_rms") = 10.0,
+           py::arg("sequential_order") = "groups")
       .def(
           "step",
           [](Solver& solver, std::size_t steps) {
@@ -152,7 +158,8 @@ void bind_solver(py::module_& m) {
           py::arg("steps") = 1, py::call_guard<py::gil_scoped_release>(),
           "Advances `steps` time steps (each time_step, in substeps). Raises\n"
           "tessera.NumericalFailure, state restored to before the failing step, if a position or\n"
-          "velocity became non-finite. Releases the GIL.")
+          "velocity became non-finite or the step diverged (RMS residual above divergence_rms).\n"
+          "Releases the GIL.")
       .def(
           "project",
           [](Solver& solver, std::size_t iterations, std::optional<double> dt) {

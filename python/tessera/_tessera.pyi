@@ -255,6 +255,8 @@ class Solver:
         report_residuals: bool = True,
         record_convergence: bool = False,
         check_finite: bool = True,
+        divergence_rms: float = 10.0,
+        sequential_order: str = "groups",
     ) -> None: ...
     def step(self, steps: int = 1) -> None:
         """`steps` time steps; raises NumericalFailure (state restored). Releases the GIL."""

@@ -3,6 +3,9 @@
 #include <tessera/io/scene_file.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -74,7 +77,9 @@ TEST(SceneFile, EveryKey) {
     "solid": {"material": "volume_and_distance", "youngs_modulus": 3e5, "poisson_ratio": 0,
               "volume_compliance": 1e-7, "distance_compliance": 1e-8, "mass": 4},
     "gravity": [0, 0, -1], "time_step": 0.01, "substeps": 3, "iterations": 7, "frames": 0,
-    "velocity_damping": 0.5, "strategy": "dsatur", "mode": "hybrid", "threads": 2})");
+    "velocity_damping": 0.5, "strategy": "dsatur", "mode": "hybrid", "threads": 2,
+    "tethers": "none", "tether_compliance": 1e-5, "sequential_order": "input",
+    "divergence_rms": 3})");
   EXPECT_EQ(scene.name, "sheet");
   EXPECT_EQ(scene.source, SceneSource::mesh);
   EXPECT_EQ(scene.mesh_file, std::filesystem::path("/scenes/sheet.obj"));
@@ -102,6 +107,10 @@ TEST(SceneFile, EveryKey) {
   EXPECT_EQ(scene.simulation.strategy, "dsatur");
   EXPECT_EQ(scene.simulation.mode, "hybrid");
   EXPECT_EQ(scene.simulation.threads, 2u);
+  EXPECT_EQ(scene.tethers, TetherRule::none);
+  EXPECT_FLOAT_EQ(scene.tether_compliance, 1e-5f);
+  EXPECT_EQ(scene.simulation.sequential_order, "input");
+  EXPECT_FLOAT_EQ(scene.simulation.divergence_rms, 3);
 }
 
 TEST(SceneFile, GeneratorAndPinRule) {
@@ -166,6 +175,62 @@ TEST(BuildScene, ClothHangsFromTwoCornersByDefault) {
   EXPECT_GT(scene.model.constraints.dihedral.size(), 0u);
   for (std::size_t p = 0; p < 20; ++p)
     EXPECT_EQ(scene.model.particles.inverse_mass[p] == 0, p == 15 || p == 19) << p;
+}
+
+TEST(BuildScene, PinnedScenesGetTethersToTheirNearestPin) {
+  // 5 × 4 cloth hung from vertices 15 and 19: every other vertex gets one tether, to the
+  // nearer corner along the grid's edges (the middle column depends on the diagonals).
+  SceneDescription description = parse_scene_spec("cloth:5x4");
+  const Scene scene = build_scene(description);
+  const TetherConstraints& tethers = scene.model.constraints.tether;
+  ASSERT_EQ(tethers.size(), 18u);
+  for (std::size_t c = 0; c < tethers.size(); ++c) {
+    const VertexIndex p = tethers.particles.particle[0][c], pin = tethers.particles.particle[1][c];
+    if (p % 5 != 2) EXPECT_EQ(pin, p % 5 < 2 ? 15u : 19u) << "vertex " << p;
+    EXPECT_TRUE(pin == 15 || pin == 19);
+    // Never shorter than the straight rest distance.
+    EXPECT_GE(tethers.max_distance[c],
+              (scene.mesh.positions[p] - scene.mesh.positions[pin]).norm() * Real(0.99999));
+  }
+  description.tethers = TetherRule::none;
+  EXPECT_EQ(build_scene(description).model.constraints.tether.size(), 0u);
+  description.tethers = TetherRule::automatic;
+  description.pins = parse_pin_rule("none");
+  EXPECT_EQ(build_scene(description).model.constraints.tether.size(), 0u) << "nothing to hold";
+  // A solid's tethers follow its tetrahedra's edges.
+  const Scene bar = build_scene(parse_scene_spec("bar:1x1x2"));
+  EXPECT_EQ(bar.model.constraints.tether.size(), 12u - bar.pinned.size());
+}
+
+TEST(BuildScene, MeshScenesWithoutPinsHoldAPatchNotOneVertex) {
+  // A 21 × 21 sheet, gently curved so one vertex is highest: the default pins are the
+  // vertices within 2 % of the diagonal of it (lowest_vertices' band), not that vertex alone.
+  const std::filesystem::path file =
+      std::filesystem::temp_directory_path() / "tessera_test_dome.obj";
+  {
+    std::ofstream out(file);
+    for (int j = 0; j <= 20; ++j)
+      for (int i = 0; i <= 20; ++i) {
+        const double x = i / 20.0 - 0.5, z = j / 20.0 - 0.5;
+        out << "v " << x << ' ' << -(x * x + z * z) << ' ' << z << '\n';
+      }
+    for (int j = 0; j < 20; ++j)
+      for (int i = 0; i < 20; ++i) {
+        const int a = j * 21 + i + 1;
+        out << "f " << a << ' ' << a + 1 << ' ' << a + 22 << "\nf " << a << ' ' << a + 22 << ' '
+            << a + 21 << '\n';
+      }
+  }
+  const Scene dome = build_scene(parse_scene_spec(file.string()));
+  std::filesystem::remove(file);
+  EXPECT_GT(dome.pinned.size(), 4u);
+  EXPECT_EQ(dome.pinned.size(), 37u) << "the lattice points within 0.173 m of the centre";
+  const Real diagonal = std::sqrt(Real(2) + Real(0.25));
+  for (const VertexIndex v : dome.pinned)
+    EXPECT_GE(dome.mesh.positions[v].y(), -Real(0.02) * diagonal - Real(1e-6)) << v;
+  EXPECT_TRUE(std::find(dome.pinned.begin(), dome.pinned.end(), VertexIndex(220)) !=
+              dome.pinned.end())
+      << "the highest vertex, the centre";
 }
 
 TEST(BuildScene, PinRulesAndMaterials) {

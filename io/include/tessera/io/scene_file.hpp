@@ -15,6 +15,7 @@
 //     "generator": "cloth:128x128",          // or "bar:10x10x80"; or instead:
 //     "mesh": "sheet.obj",                   // a mesh file, relative to the scene file
 //     "pins": "default",                     // "none", "lowest-y", "highest-x", ... or [0, 17]
+//     "tethers": "auto", "tether_compliance": 0,  // or "none": no long-range attachments
 //     "shell": { "material": "distance",     // or "strain_triangle", "fem_triangle"
 //                "bending": "dihedral",      // or "isometric", "none"
 //                "distance_compliance": 0, "bending_compliance": 1e-3,
@@ -25,7 +26,9 @@
 //     "gravity": [0, -9.81, 0],
 //     "time_step": 0.0166667, "substeps": 16, "iterations": 2, "frames": 60,
 //     "velocity_damping": 0,
-//     "strategy": "stencil", "mode": "gs", "threads": 0   // 0: every hardware thread
+//     "strategy": "stencil", "mode": "gs", "threads": 0,  // 0: every hardware thread
+//     "sequential_order": "groups",          // mode sequential: or "input"
+//     "divergence_rms": 10                   // a step above this RMS residual is a failure
 //   }
 //
 // What the pin rules pick is said with PinRule (scene_description.hpp).

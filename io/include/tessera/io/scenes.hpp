@@ -125,11 +125,21 @@ Model make_bar_scene(std::size_t cells_x, std::size_t cells_y, std::size_t cells
 Model make_model(const Mesh& mesh, std::span<const VertexIndex> pinned,
                  const ShellOptions& shell = {}, const SolidOptions& solid = {});
 
+/// How close to the extreme coordinate a vertex must be for the pin rules "lowest-<axis>" /
+/// "highest-<axis>": a fraction of the bounding box's diagonal (rounding only).
+inline constexpr Real kExtremeVertexBand = Real(1e-6);
+/// The patch a mesh scene without explicit pins hangs from or stands on: the vertices within
+/// 2 % of the diagonal of its lowest (solid) or highest (shell) one. One vertex would carry
+/// the whole weight (a 13 k-particle sphere ended with Green strain 59 there); the patch of a
+/// sphere is a cap of about a third of its radius.
+inline constexpr Real kDefaultPinPatch = Real(0.02);
+
 /// The vertices lowest along `axis` (0 = x, 1 = y, 2 = z): every vertex within
-/// 1e-6 × (the diagonal of the bounding box) of the minimum coordinate, in increasing order.
-/// Empty for no positions. Throws InvalidInput for an axis above 2 or a non-finite position.
+/// band × (the diagonal of the bounding box) of the minimum coordinate, in increasing order.
+/// Empty for no positions. Throws InvalidInput for an axis above 2, a non-finite position or
+/// a band that is negative or not finite.
 std::vector<VertexIndex> lowest_vertices(std::span<const Vector3r> positions,
-                                         std::size_t axis = 1);
+                                         std::size_t axis = 1, Real band = kExtremeVertexBand);
 
 /// Bending stencils of a triangle mesh: four indices (wing0, wing1, edge0, edge1) per interior
 /// manifold edge edge0–edge1 (edge0 < edge1), in the order of the edges sorted by (edge0,

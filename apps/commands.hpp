@@ -17,8 +17,8 @@ namespace tessera::cli {
 struct RunOptions {
   SceneOptions scene;
   std::optional<std::size_t> frames, substeps, iterations, threads;
-  std::optional<double> time_step, velocity_damping;
-  std::optional<std::string> strategy, mode, out;
+  std::optional<double> time_step, velocity_damping, chebyshev_rho;
+  std::optional<std::string> strategy, mode, out, chebyshev;
   bool write_obj = false;
   bool balance = false;
   bool json = false;

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <sstream>
 
 namespace tessera::cli {
 
@@ -35,6 +36,22 @@ CLI::Validator finite_number_above(double low, bool low_inclusive, const std::st
         const bool number = end != text.c_str() && *end == '\0' && errno == 0 && std::isfinite(value);
         if (!number || !(low_inclusive ? value >= low : value > low))
           return wanted + ", not '" + text + "'";
+        return {};
+      },
+      "NUMBER");
+}
+
+CLI::Validator finite_number_between(double low, double high) {
+  std::ostringstream range;
+  range << "must be a number in (" << low << ", " << high << ")";
+  const std::string wanted = range.str();
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        char* end = nullptr;
+        errno = 0;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = end != text.c_str() && *end == '\0' && errno == 0 && std::isfinite(value);
+        if (!number || !(value > low && value < high)) return wanted + ", not '" + text + "'";
         return {};
       },
       "NUMBER");

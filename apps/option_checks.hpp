@@ -14,5 +14,7 @@ namespace tessera::cli {
 CLI::Validator integer_from(std::size_t low, std::size_t high);
 /// A finite number above `low` (or at least `low` when `low_inclusive`), in `unit`.
 CLI::Validator finite_number_above(double low, bool low_inclusive, const std::string& unit);
+/// A finite number strictly between `low` and `high`.
+CLI::Validator finite_number_between(double low, double high);
 
 }  // namespace tessera::cli

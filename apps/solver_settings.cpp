@@ -12,6 +12,8 @@ SolverSettings solver_settings(const io::SimulationSettings& simulation) {
   settings.iterations = simulation.iterations;
   settings.gravity = simulation.gravity;
   settings.velocity_damping = simulation.velocity_damping;
+  if (simulation.chebyshev) settings.chebyshev = *simulation.chebyshev;
+  if (simulation.chebyshev_rho) settings.chebyshev_rho = *simulation.chebyshev_rho;
   return settings;
 }
 

@@ -137,7 +137,7 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
                        {settings_.mode, settings_.block_size, settings_.hybrid_threshold, threads});
   state_ = scheduled_particles(model.particles, schedule_);
   jacobi_work_.bind(schedule_.jacobi());
-  if (settings_.chebyshev)
+  if (settings_.chebyshev && settings_.mode == SolverMode::jacobi)
     for (AlignedVector<Real>& previous : chebyshev_previous_)
       previous.assign(schedule_.jacobi().particles.size(), 0);
   build_stages();
@@ -247,7 +247,8 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
     case StageKind::jacobi_projection: return jacobi_projection(jacobi, work, blocks, projection);
     case StageKind::jacobi_reduction:
       return jacobi_reduction(jacobi, work,
-                              settings_.chebyshev && stage.set == StageSet::jacobi);
+                              settings_.chebyshev && settings_.mode == SolverMode::jacobi &&
+                                  stage.set == StageSet::jacobi);
     case StageKind::sequential_sweep: {
       const ParticleArrays particles = ParticleArrays::of(state_);
       for (const ScheduleBlock& block : blocks)

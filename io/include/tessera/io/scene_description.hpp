@@ -19,6 +19,7 @@
 #include <array>
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,10 @@ struct SimulationSettings {
   std::size_t iterations = 2;
   std::size_t frames = 60;
   Real velocity_damping = 0;
+  /// Chebyshev acceleration of mode jacobi and its ρ (SolverSettings::chebyshev,
+  /// chebyshev_rho); unset keeps the solver's default.
+  std::optional<bool> chebyshev;
+  std::optional<Real> chebyshev_rho;
   std::string strategy = "stencil";
   std::string mode = "gs";
   /// 0: every hardware thread (the solver's meaning, tessera::worker_threads).

@@ -74,7 +74,7 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
       ->check(CLI::IsMember({"on", "off"}));
   command->add_option("--chebyshev-rho", options.chebyshev_rho,
                       "the Chebyshev acceleration's spectral radius estimate, in (0, 1) "
-                      "(default 0.99)")
+                      "(default 0.9)")
       ->check(finite_number_between(0, 1));
   command->add_flag("--balance", options.balance, "run the colouring's balance pass");
   command->add_option("--out", options.out,

@@ -41,7 +41,11 @@ io::SimulationSettings simulation_of(const io::SceneDescription& scene, const Ru
   if (options.threads) simulation.threads = *options.threads;
   if (options.time_step) simulation.time_step = Real(*options.time_step);
   if (options.velocity_damping) simulation.velocity_damping = Real(*options.velocity_damping);
-  if (options.chebyshev) simulation.chebyshev = *options.chebyshev == "on";
+  if (options.chebyshev) {
+    if (*options.chebyshev != "on" && *options.chebyshev != "off")
+      throw InvalidInput("--chebyshev: unknown value '" + *options.chebyshev + "' (known: on, off)");
+    simulation.chebyshev = *options.chebyshev == "on";
+  }
   if (options.chebyshev_rho) simulation.chebyshev_rho = Real(*options.chebyshev_rho);
   if (options.strategy) simulation.strategy = *options.strategy;
   if (options.mode) simulation.mode = *options.mode;
@@ -70,8 +74,7 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
                       "colouring strategy (default stencil; `tessera info` lists them)");
   command->add_option("--mode", options.mode, "gs, jacobi, hybrid or sequential (default gs)");
   command->add_option("--chebyshev", options.chebyshev,
-                      "on or off: Chebyshev acceleration of mode jacobi's iterations (default on)")
-      ->check(CLI::IsMember({"on", "off"}));
+                      "on or off: Chebyshev acceleration of mode jacobi's iterations (default on)");
   command->add_option("--chebyshev-rho", options.chebyshev_rho,
                       "the Chebyshev acceleration's spectral radius estimate, in (0, 1) "
                       "(default 0.9)")

@@ -23,8 +23,8 @@ namespace {
 using test::same_bits;
 
 /// Accelerated / plain residual after 48 iterations must stay below these (see below).
-constexpr double kClothRatio = 1.0;
-constexpr double kBarRatio = 1.0;
+constexpr double kClothRatio = 0.95;  // measured 0.915 (float)
+constexpr double kBarRatio = 0.95;    // measured 0.913 (float)
 
 SolverSettings jacobi_settings(bool chebyshev, std::size_t iterations) {
   SolverSettings settings;
@@ -94,7 +94,7 @@ TEST(Chebyshev, ReachesALowerResidualThanPlainJacobiOnATetBar) {
 // ωₙ = 4 / (4 − ρ² ωₙ₋₁).
 TEST(Chebyshev, FollowsTheSemiIterativeRecurrence) {
   const std::vector<Vector3r> points = {Vector3r(0, 0, 0), Vector3r(1, 0, 0)};
-  const std::vector<Vector3r> stretched = {Vector3r(0, 0, 0), Vector3r(3, 0, 0)};
+  const std::vector<Vector3r> stretched = {Vector3r(0, 0, 0), Vector3r(Real(1.4), 0, 0)};
   const std::vector<ParticleIndex> edge = {0, 1};
   Model model;
   model.particles = ParticleState(stretched, std::vector<Real>{0, 1});
@@ -104,7 +104,7 @@ TEST(Chebyshev, FollowsTheSemiIterativeRecurrence) {
   settings.semantics = ConstraintSemantics::stiffness;
   settings.chebyshev_rho = Real(0.8);
   const Real omega_j = settings.jacobi_relaxation, rho2 = Real(0.64);
-  std::vector<double> expected = {3};  // x of particle 1 after 0, 1, 2, ... iterations
+  std::vector<double> expected = {1.4};  // x of particle 1 after 0, 1, 2, ... iterations
   double weight = 1;
   for (int n = 1; n <= 6; ++n) {
     const double previous = expected.back();

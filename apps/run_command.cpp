@@ -74,7 +74,7 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
                       "colouring strategy (default stencil; `tessera info` lists them)");
   command->add_option("--mode", options.mode, "gs, jacobi, hybrid or sequential (default gs)");
   command->add_option("--chebyshev", options.chebyshev,
-                      "on or off: Chebyshev acceleration of mode jacobi's iterations (default on)");
+                      "on or off: Chebyshev acceleration of mode jacobi's iterations (default off)");
   command->add_option("--chebyshev-rho", options.chebyshev_rho,
                       "the Chebyshev acceleration's spectral radius estimate, in (0, 1) "
                       "(default 0.9)")

@@ -48,7 +48,7 @@ namespace tessera {
 inline constexpr Real kDefaultJacobiRelaxation = Real(1.5);
 /// Chebyshev acceleration of the Jacobi iterations when nothing else is said (see
 /// SolverSettings::chebyshev for the measurement).
-inline constexpr bool kDefaultChebyshev = true;
+inline constexpr bool kDefaultChebyshev = false;
 inline constexpr Real kDefaultChebyshevRho = Real(0.9);
 inline constexpr std::size_t kDefaultChebyshevDelay = 2;
 
@@ -85,18 +85,23 @@ struct SolverSettings {
   /// more copy of x, y, z of the set's movable particles and three loads and stores per
   /// particle in the reduction; the result stays bitwise the same for any thread count.
   ///
-  /// On by default, ρ = 0.9, delay 2, chosen with bench/chebyshev_report (one step of 1/60 s
-  /// from a moving state, iterations until the residual plain Jacobi reaches after 32 / 128 /
-  /// 256 iterations): 256² cloth (distance RMS) 15 / 57 / 113, 12×12×48 FEM bar (E = 10⁶)
-  /// 21 / 55 / 74, i.e. 1.5-3.5× fewer, at a cost per iteration within the noise of
-  /// solver/chebyshev (bench_solver). Larger ρ converge faster in long solves (ρ = 0.99:
-  /// 14 / 21 / 37 and 15 / 24 / 30) but made some 60-frame runs of the cloth diverge
-  /// (chebyshev_report --frames: ρ = 0.99 at 4 substeps × 8 and 8 × 4; ρ = 0.95 at 8 × 4),
-  /// and delay 1 made 16 × 2 diverge even at ρ = 0.9 (the last iteration of every substep
-  /// then overshoots by ω₂ = 1.68, and the velocity update keeps it); ρ = 0.9 with delay 2
-  /// was stable and ended with a lower residual than plain Jacobi at 16 × 3, 8 × 4, 8 × 6,
-  /// 4 × 8, 2 × 16 and 1 × 32, on the cloth and the bar. With delay 2, solves of 1 or 2
-  /// iterations (the tool's default 16 × 2) are exactly plain Jacobi.
+  /// Off by default (an option), measured with bench/chebyshev_report (one step of 1/60 s
+  /// from a moving state; iterations until the residual plain Jacobi reaches after 32 / 128 /
+  /// 256 iterations): with ρ = 0.9, delay 2, the 256² cloth (distance RMS) takes 15 / 57 /
+  /// 113, the 12×12×48 FEM bar (E = 10⁶) 21 / 55 / 74, i.e. 1.5-3.5× fewer, at a cost per
+  /// iteration within the noise of solver/chebyshev (bench_solver). Larger ρ converge faster
+  /// in long solves (ρ = 0.99: 14 / 21 / 37 and 15 / 24 / 30) but made 60-frame runs of the
+  /// cloth diverge (chebyshev_report --frames: ρ = 0.99 at 4 substeps × 8 and 8 × 4, ρ = 0.95
+  /// at 8 × 4), and delay 1 made 16 × 2 diverge even at ρ = 0.9 (the last iteration of every
+  /// substep then overshoots by ω₂ = 1.68 and the velocity update keeps it). ρ = 0.9 with
+  /// delay 2 was stable and ended with a lower residual than plain Jacobi at 16 × 3, 8 × 4,
+  /// 8 × 6, 4 × 8, 2 × 16 and 1 × 32 on the cloth and the bar, and solves of 1 or 2
+  /// iterations (the tool's 16 × 2) are exactly plain Jacobi. It is not the default because
+  /// the extrapolation breaks two things plain Jacobi gets right: unilateral constraints (a
+  /// particle–tet contact in the Jacobi set is extrapolated through the surface: 6 mm of
+  /// penetration where plain Jacobi leaves < 2 mm, parallel.Contacts test), and a damped
+  /// 2×2×10 bar at 100 iterations per step settles 0.37 away from the sequential solver's
+  /// shape instead of < 0.08 (parallel.Solver.ModesReachTheSameRestShape).
   bool chebyshev = kDefaultChebyshev;
   Real chebyshev_rho = kDefaultChebyshevRho;
   std::size_t chebyshev_delay = kDefaultChebyshevDelay;

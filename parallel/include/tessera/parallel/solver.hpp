@@ -88,8 +88,11 @@ struct SolverSettings {
   /// Off by default (an option), measured with bench/chebyshev_report (one step of 1/60 s
   /// from a moving state; iterations until the residual plain Jacobi reaches after 32 / 128 /
   /// 256 iterations): with ρ = 0.9, delay 2, the 256² cloth (distance RMS) takes 15 / 57 /
-  /// 113, the 12×12×48 FEM bar (E = 10⁶) 21 / 55 / 74, i.e. 1.5-3.5× fewer, at a cost per
-  /// iteration within the noise of solver/chebyshev (bench_solver). Larger ρ converge faster
+  /// 113, the 12×12×48 FEM bar (E = 10⁶) 21 / 55 / 74, i.e. 1.5-3.5× fewer. Cost per
+  /// iteration (bench_solver solver/chebyshev, 1 thread, fastest of 10-15 repetitions on a
+  /// 2-core machine under a load of 7-9, so only indicative): cloth256 +2 to +5 %, tetbar200k
+  /// +16 to +26 %, which three more loads and stores per particle cannot explain; measure
+  /// again on a quiet machine before relying on it. Larger ρ converge faster
   /// in long solves (ρ = 0.99: 14 / 21 / 37 and 15 / 24 / 30) but made 60-frame runs of the
   /// cloth diverge (chebyshev_report --frames: ρ = 0.99 at 4 substeps × 8 and 8 × 4, ρ = 0.95
   /// at 8 × 4), and delay 1 made 16 × 2 diverge even at ρ = 0.9 (the last iteration of every

@@ -17,8 +17,8 @@ namespace tessera::cli {
 struct RunOptions {
   SceneOptions scene;
   std::optional<std::size_t> frames, substeps, iterations, threads;
-  std::optional<double> time_step, velocity_damping, divergence_rms;
-  std::optional<std::string> strategy, mode, sequential_order, out;
+  std::optional<double> time_step, velocity_damping, divergence_rms, chebyshev_rho;
+  std::optional<std::string> strategy, mode, sequential_order, out, chebyshev;
   bool write_obj = false;
   bool balance = false;
   bool json = false;

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <sstream>
 
 namespace tessera::cli {
 
@@ -51,6 +52,22 @@ CLI::Validator positive_number_or_inf() {
         return {};
       },
       "NUMBER|inf");
+}
+
+CLI::Validator finite_number_between(double low, double high) {
+  std::ostringstream range;
+  range << "must be a number in (" << low << ", " << high << ")";
+  const std::string wanted = range.str();
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        char* end = nullptr;
+        errno = 0;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = end != text.c_str() && *end == '\0' && errno == 0 && std::isfinite(value);
+        if (!number || !(value > low && value < high)) return wanted + ", not '" + text + "'";
+        return {};
+      },
+      "NUMBER");
 }
 
 }  // namespace tessera::cli

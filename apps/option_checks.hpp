@@ -16,5 +16,7 @@ CLI::Validator integer_from(std::size_t low, std::size_t high);
 CLI::Validator finite_number_above(double low, bool low_inclusive, const std::string& unit);
 /// A number above 0, or "inf".
 CLI::Validator positive_number_or_inf();
+/// A finite number strictly between `low` and `high`.
+CLI::Validator finite_number_between(double low, double high);
 
 }  // namespace tessera::cli

@@ -41,6 +41,12 @@ io::SimulationSettings simulation_of(const io::SceneDescription& scene, const Ru
   if (options.threads) simulation.threads = *options.threads;
   if (options.time_step) simulation.time_step = Real(*options.time_step);
   if (options.velocity_damping) simulation.velocity_damping = Real(*options.velocity_damping);
+  if (options.chebyshev) {
+    if (*options.chebyshev != "on" && *options.chebyshev != "off")
+      throw InvalidInput("--chebyshev: unknown value '" + *options.chebyshev + "' (known: on, off)");
+    simulation.chebyshev = *options.chebyshev == "on";
+  }
+  if (options.chebyshev_rho) simulation.chebyshev_rho = Real(*options.chebyshev_rho);
   if (options.strategy) simulation.strategy = *options.strategy;
   if (options.mode) simulation.mode = *options.mode;
   if (options.sequential_order) simulation.sequential_order = *options.sequential_order;
@@ -76,6 +82,12 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
                       "a step that ends with an RMS residual above this fails (default 10; inf "
                       "turns the check off)")
       ->check(positive_number_or_inf());
+  command->add_option("--chebyshev", options.chebyshev,
+                      "on or off: Chebyshev acceleration of mode jacobi's iterations (default off)");
+  command->add_option("--chebyshev-rho", options.chebyshev_rho,
+                      "the Chebyshev acceleration's spectral radius estimate, in (0, 1) "
+                      "(default 0.9)")
+      ->check(finite_number_between(0, 1));
   command->add_flag("--balance", options.balance, "run the colouring's balance pass");
   command->add_option("--out", options.out,
                       "write every frame as DIR/frame_NNNNN.vtu plus DIR/frames.pvd (DIR is "

@@ -10,7 +10,8 @@ namespace tessera::cli {
 
 /// The mode parsed from its name (InvalidInput naming it when unknown), the thread count as
 /// given (0 stays 0: the solver reads it through worker_threads), the time step, substeps,
-/// iterations, gravity and velocity damping; every other field keeps SolverSettings' default.
+/// iterations, gravity, velocity damping and (when set) the Chebyshev acceleration and its ρ;
+/// every other field keeps SolverSettings' default.
 SolverSettings solver_settings(const io::SimulationSettings& simulation);
 
 }  // namespace tessera::cli

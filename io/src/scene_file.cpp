@@ -210,10 +210,9 @@ SceneDescription describe(const Json& json, const std::string& name,
                           const std::filesystem::path& base) {
   const ObjectReader reader(json, name, "");
   reader.only({"name", "generator", "mesh", "pins", "tethers", "tether_compliance",
-               "tether_reach_scale", "shell",
-               "solid", "gravity", "time_step", "substeps", "iterations", "frames",
-               "velocity_damping", "strategy", "mode", "sequential_order", "divergence_rms",
-               "threads"});
+               "tether_reach_scale", "shell", "solid", "gravity", "time_step", "substeps",
+               "iterations", "frames", "velocity_damping", "chebyshev", "chebyshev_rho",
+               "strategy", "mode", "sequential_order", "divergence_rms", "threads"});
   const Json* generator = reader.find("generator");
   const Json* mesh = reader.find("mesh");
   if ((generator != nullptr) == (mesh != nullptr))
@@ -267,6 +266,16 @@ SceneDescription describe(const Json& json, const std::string& name,
   reader.read_count("iterations", simulation.iterations, 1);
   reader.read_count("frames", simulation.frames, 0);
   reader.read_real("velocity_damping", simulation.velocity_damping, 0, true);
+  if (const Json* chebyshev = reader.find("chebyshev")) {
+    if (!chebyshev->is_boolean())
+      reader.fail("'chebyshev' must be true or false, not " + ObjectReader::show(*chebyshev));
+    simulation.chebyshev = chebyshev->get<bool>();
+  }
+  if (reader.find("chebyshev_rho")) {
+    Real rho = 0;
+    reader.read_real("chebyshev_rho", rho, 0, false, 1, false);
+    simulation.chebyshev_rho = rho;
+  }
   reader.read_string("strategy", simulation.strategy);
   reader.read_string("mode", simulation.mode);
   reader.read_string("sequential_order", simulation.sequential_order);

@@ -49,6 +49,12 @@ void check_settings(const SolverSettings& s) {
   if (!(s.jacobi_relaxation > 0 && s.jacobi_relaxation < 2))
     throw InvalidInput("solver settings: Jacobi relaxation must be in (0, 2) (got " +
                        std::to_string(s.jacobi_relaxation) + ")");
+  if (!(s.chebyshev_rho > 0 && s.chebyshev_rho < 1))
+    throw InvalidInput("solver settings: chebyshev_rho (the Chebyshev spectral radius "
+                       "estimate) must be in (0, 1) (got " +
+                       std::to_string(s.chebyshev_rho) + ")");
+  if (s.chebyshev_delay == 0)
+    throw InvalidInput("solver settings: chebyshev_delay must be at least 1");
   if (s.block_size == 0) throw InvalidInput("solver settings: block size must be at least 1");
   if (!s.gravity.allFinite()) throw InvalidInput("solver settings: gravity is not finite");
   if (!(s.divergence_rms > 0))
@@ -137,6 +143,9 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
                         settings_.sequential_order});
   state_ = scheduled_particles(model.particles, schedule_);
   jacobi_work_.bind(schedule_.jacobi());
+  if (settings_.chebyshev && settings_.mode == SolverMode::jacobi)
+    for (AlignedVector<Real>& previous : chebyshev_previous_)
+      previous.assign(schedule_.jacobi().particles.size(), 0);
   build_stages();
   statistics_.seconds_schedule = seconds_since(start);
 
@@ -242,7 +251,10 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
       return;
     }
     case StageKind::jacobi_projection: return jacobi_projection(jacobi, work, blocks, projection);
-    case StageKind::jacobi_reduction: return jacobi_reduction(jacobi, work);
+    case StageKind::jacobi_reduction:
+      return jacobi_reduction(jacobi, work,
+                              settings_.chebyshev && settings_.mode == SolverMode::jacobi &&
+                                  stage.set == StageSet::jacobi);
     case StageKind::sequential_sweep: {
       const ParticleArrays particles = ParticleArrays::of(state_);
       for (const ScheduleBlock& block : blocks)
@@ -308,9 +320,20 @@ void Solver::jacobi_projection(JacobiSet& jacobi, JacobiWork& work,
   });
 }
 
-void Solver::jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work) {
+void Solver::jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work,
+                              bool chebyshev) {
   const Real omega = settings_.jacobi_relaxation;
-  parallel_chunks(jacobi.particles.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
+  // Chebyshev (SolverSettings::chebyshev): iteration n reads qₙ₋₁ here and makes q̂ₙ; it
+  // keeps qₙ₋₁ for iteration n + 1 (from n = delay on) and, past the delay, moves to
+  // qₙ₋₂ + ωₙ (q̂ₙ − qₙ₋₂). Element-wise per particle: no order, no thread dependence.
+  const std::size_t n = chebyshev_iteration_, delay = settings_.chebyshev_delay;
+  const bool keep = chebyshev && n >= delay;
+  const bool extrapolate = chebyshev && n > delay;
+  const Real weight = chebyshev_weight_;
+  Real* previous_x = chebyshev_previous_[0].data();
+  Real* previous_y = chebyshev_previous_[1].data();
+  Real* previous_z = chebyshev_previous_[2].data();
+  const auto reduce = [&]<bool Keep, bool Extrapolate>(std::size_t first, std::size_t last) {
     for (std::size_t k = first; k < last; ++k) {
       const ParticleIndex p = jacobi.particles[k];
       const std::uint32_t begin = jacobi.particle_offsets[k], end = jacobi.particle_offsets[k + 1];
@@ -323,14 +346,36 @@ void Solver::jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work) {
         dz += work.z[i] - z;
       }
       const Real scale = omega / Real(end - begin);
-      state_.x[p] = x + scale * dx;
-      state_.y[p] = y + scale * dy;
-      state_.z[p] = z + scale * dz;
+      Real qx = x + scale * dx, qy = y + scale * dy, qz = z + scale * dz;
+      if constexpr (Extrapolate) {
+        qx = previous_x[k] + weight * (qx - previous_x[k]);
+        qy = previous_y[k] + weight * (qy - previous_y[k]);
+        qz = previous_z[k] + weight * (qz - previous_z[k]);
+      }
+      if constexpr (Keep) {
+        previous_x[k] = x;
+        previous_y[k] = y;
+        previous_z[k] = z;
+      }
+      state_.x[p] = qx;
+      state_.y[p] = qy;
+      state_.z[p] = qz;
     }
+  };
+  parallel_chunks(jacobi.particles.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
+    if (extrapolate) reduce.template operator()<true, true>(first, last);
+    else if (keep) reduce.template operator()<true, false>(first, last);
+    else reduce.template operator()<false, false>(first, last);
   });
 }
 
-void Solver::iterate(const ProjectionSettings& projection) {
+void Solver::iterate(const ProjectionSettings& projection, std::size_t iteration) {
+  const std::size_t delay = settings_.chebyshev_delay;
+  const Real rho2 = settings_.chebyshev_rho * settings_.chebyshev_rho;
+  chebyshev_iteration_ = iteration;
+  chebyshev_weight_ = iteration <= delay     ? Real(1)
+                      : iteration == delay + 1 ? Real(2) / (Real(2) - rho2)
+                                               : Real(4) / (Real(4) - rho2 * chebyshev_weight_);
   for (const Stage& stage : stages_) run_stage(stage, projection);
 }
 
@@ -404,7 +449,7 @@ void Solver::project(std::size_t iterations, Real dt) {
   projection_dt_ = dt;
   const auto start = Clock::now();
   save_state();
-  for (std::size_t it = 0; it < iterations; ++it) iterate(projection);
+  for (std::size_t it = 0; it < iterations; ++it) iterate(projection, it + 1);
   restore_if_not_finite("a projection");
   statistics_.seconds_projection += seconds_since(start);
   statistics_.projections +=
@@ -470,7 +515,7 @@ void Solver::step() {
     if (last && settings_.record_convergence) report_.history.push_back(report_.residual_before);
     const auto projection_start = Clock::now();
     for (std::size_t it = 0; it < settings_.iterations; ++it) {
-      iterate(projection);
+      iterate(projection, it + 1);
       if (last && settings_.record_convergence) {
         statistics_.seconds_projection += seconds_since(projection_start);
         report_.history.push_back(residual());

@@ -77,9 +77,9 @@ TEST(SceneFile, EveryKey) {
     "solid": {"material": "volume_and_distance", "youngs_modulus": 3e5, "poisson_ratio": 0,
               "volume_compliance": 1e-7, "distance_compliance": 1e-8, "mass": 4},
     "gravity": [0, 0, -1], "time_step": 0.01, "substeps": 3, "iterations": 7, "frames": 0,
-    "velocity_damping": 0.5, "strategy": "dsatur", "mode": "hybrid", "threads": 2,
-    "tethers": "none", "tether_compliance": 1e-5, "sequential_order": "input",
-    "divergence_rms": 3})");
+    "velocity_damping": 0.5, "chebyshev": false, "chebyshev_rho": 0.75, "strategy": "dsatur",
+    "mode": "hybrid", "threads": 2, "tethers": "none", "tether_compliance": 1e-5,
+    "sequential_order": "input", "divergence_rms": 3})");
   EXPECT_EQ(scene.name, "sheet");
   EXPECT_EQ(scene.source, SceneSource::mesh);
   EXPECT_EQ(scene.mesh_file, std::filesystem::path("/scenes/sheet.obj"));
@@ -104,6 +104,8 @@ TEST(SceneFile, EveryKey) {
   EXPECT_EQ(scene.simulation.iterations, 7u);
   EXPECT_EQ(scene.simulation.frames, 0u);
   EXPECT_FLOAT_EQ(scene.simulation.velocity_damping, 0.5f);
+  EXPECT_EQ(scene.simulation.chebyshev, false);
+  EXPECT_EQ(scene.simulation.chebyshev_rho, Real(0.75));
   EXPECT_EQ(scene.simulation.strategy, "dsatur");
   EXPECT_EQ(scene.simulation.mode, "hybrid");
   EXPECT_EQ(scene.simulation.threads, 2u);
@@ -121,6 +123,8 @@ TEST(SceneFile, GeneratorAndPinRule) {
   EXPECT_EQ(scene.pins.axis, 2u);
   EXPECT_EQ(scene.name, "bar:1x2x3");
   EXPECT_EQ(scene.simulation.substeps, SimulationSettings{}.substeps);
+  EXPECT_FALSE(scene.simulation.chebyshev.has_value());  // the solver's default
+  EXPECT_FALSE(scene.simulation.chebyshev_rho.has_value());
 }
 
 TEST(SceneFile, ErrorsNameTheKeyOrTheLine) {
@@ -133,6 +137,10 @@ TEST(SceneFile, ErrorsNameTheKeyOrTheLine) {
             "scene.json: 'substeps' must be a positive integer up to 2^31, not 0");
   EXPECT_EQ(json_error(R"({"generator": "cloth", "time_step": "fast"})"),
             "scene.json: 'time_step' must be a number in (0, inf), not \"fast\"");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "chebyshev": "yes"})"),
+            "scene.json: 'chebyshev' must be true or false, not \"yes\"");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "chebyshev_rho": 1})"),
+            "scene.json: 'chebyshev_rho' must be a number in (0, 1), not 1");
   EXPECT_EQ(json_error(R"({"generator": "cloth", "shell": {"poisson_ratio": 0.5}})"),
             "scene.json: 'shell.poisson_ratio' must be a number in [0, 0.5), not 0.5");
   EXPECT_EQ(json_error(R"({"generator": "cloth", "shell": {"bending": "soft"}})"),

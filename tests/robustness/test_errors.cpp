@@ -291,6 +291,15 @@ TEST(ErrorCatalogue, OtherSolverSettings) {
   EXPECT_EQ(invalid_input([&] { Solver(model, colouring, settings); }),
             "solver settings: Jacobi relaxation must be in (0, 2) (got 2.000000)");
   settings = SolverSettings{};
+  settings.chebyshev_rho = 1;
+  EXPECT_EQ(invalid_input([&] { Solver(model, colouring, settings); }),
+            "solver settings: chebyshev_rho (the Chebyshev spectral radius estimate) must be in "
+            "(0, 1) (got 1.000000)");
+  settings = SolverSettings{};
+  settings.chebyshev_delay = 0;
+  EXPECT_EQ(invalid_input([&] { Solver(model, colouring, settings); }),
+            "solver settings: chebyshev_delay must be at least 1");
+  settings = SolverSettings{};
   settings.velocity_damping = -1;
   EXPECT_EQ(invalid_input([&] { Solver(model, colouring, settings); }),
             "solver settings: velocity damping must be >= 0 and finite (got -1.000000)");

@@ -278,6 +278,8 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
       {{"run", "--dt", "-0.5"}, "tessera run: --dt: must be a finite number of seconds above 0, not '-0.5'"},
       {{"run", "--dt", "inf"}, "tessera run: --dt: must be a finite number of seconds above 0, not 'inf'"},
       {{"run", "--damping", "-1"}, "tessera run: --damping: must be a finite number of 1/seconds (0 or more), not '-1'"},
+      {{"run", "--chebyshev", "maybe"}, "tessera run: --chebyshev: unknown value 'maybe' (known: on, off)"},
+      {{"run", "--chebyshev-rho", "1"}, "tessera run: --chebyshev-rho: must be a number in (0, 1), not '1'"},
       {{"run", "--mode", "fast"}, "tessera run: unknown solver mode 'fast' (known: gs, jacobi, hybrid, sequential)"},
       {{"run", "--strategy", "nope"}, "tessera run: unknown colouring strategy 'nope' " + strategies},
       {{"run", "--pins", "left"}, "tessera run: --pins: unknown pin rule 'left' (known: default, none, lowest-x, lowest-y, lowest-z, highest-x, highest-y, highest-z)"},

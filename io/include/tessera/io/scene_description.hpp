@@ -24,6 +24,7 @@
 #include <array>
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -68,6 +69,10 @@ struct SimulationSettings {
   std::size_t iterations = 2;
   std::size_t frames = 60;
   Real velocity_damping = 0;
+  /// Chebyshev acceleration of mode jacobi and its ρ (SolverSettings::chebyshev,
+  /// chebyshev_rho); unset keeps the solver's default.
+  std::optional<bool> chebyshev;
+  std::optional<Real> chebyshev_rho;
   std::string strategy = "stencil";
   std::string mode = "gs";
   /// Mode sequential's order: "groups" (the reference library's) or "input".

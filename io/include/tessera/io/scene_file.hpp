@@ -26,6 +26,7 @@
 //     "gravity": [0, -9.81, 0],
 //     "time_step": 0.0166667, "substeps": 16, "iterations": 2, "frames": 60,
 //     "velocity_damping": 0,
+//     "chebyshev": true, "chebyshev_rho": 0.9,  // mode jacobi's acceleration (solver.hpp)
 //     "strategy": "stencil", "mode": "gs", "threads": 0,  // 0: every hardware thread
 //     "sequential_order": "groups",          // mode sequential: or "input"
 //     "divergence_rms": 10                   // a step above this RMS residual is a failure

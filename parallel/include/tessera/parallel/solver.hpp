@@ -47,6 +47,11 @@ namespace tessera {
 
 /// Jacobi over-relaxation ω when nothing else is said (see the README for the measurement).
 inline constexpr Real kDefaultJacobiRelaxation = Real(1.5);
+/// Chebyshev acceleration of the Jacobi iterations when nothing else is said (see
+/// SolverSettings::chebyshev for the measurement).
+inline constexpr bool kDefaultChebyshev = false;
+inline constexpr Real kDefaultChebyshevRho = Real(0.9);
+inline constexpr std::size_t kDefaultChebyshevDelay = 2;
 
 struct SolverSettings {
   SolverMode mode = SolverMode::gs;
@@ -66,6 +71,44 @@ struct SolverSettings {
   Real velocity_damping = 0;
   /// Jacobi over-relaxation ω (jacobi and hybrid modes), in (0, 2).
   Real jacobi_relaxation = kDefaultJacobiRelaxation;
+  /// Chebyshev semi-iterative acceleration of the Jacobi iterations (Wang 2015, "A Chebyshev
+  /// semi-iterative approach for accelerating projective and position-based dynamics"):
+  /// within one solve (the iterations of a substep, or one project() call), the n-th
+  /// iteration's Jacobi result q̂ₙ (already relaxed by jacobi_relaxation, which plays the
+  /// paper's γ) is extrapolated from the positions of the iteration before last,
+  ///   qₙ = ωₙ (q̂ₙ − qₙ₋₂) + qₙ₋₂,
+  /// ωₙ = 1 for n ≤ chebyshev_delay (the paper's S), 2 / (2 − ρ²) for the next, then
+  /// 4 / (4 − ρ² ωₙ₋₁), with ρ = chebyshev_rho the estimated spectral radius of the
+  /// iteration, in (0, 1); chebyshev_delay ≥ 1. It applies to the particles of the
+  /// schedule's Jacobi set in mode jacobi only (in hybrid, whose Jacobi phase follows the
+  /// coloured ones, it gave 1-3 % fewer iterations on the cloth and a non-monotonic residual
+  /// on the bar): not to the dynamic constraints, never to a static particle. It costs one
+  /// more copy of x, y, z of the set's movable particles and three loads and stores per
+  /// particle in the reduction; the result stays bitwise the same for any thread count.
+  ///
+  /// Off by default (an option), measured with bench/chebyshev_report (one step of 1/60 s
+  /// from a moving state; iterations until the residual plain Jacobi reaches after 32 / 128 /
+  /// 256 iterations): with ρ = 0.9, delay 2, the 256² cloth (distance RMS) takes 15 / 57 /
+  /// 113, the 12×12×48 FEM bar (E = 10⁶) 21 / 55 / 74, i.e. 1.5-3.5× fewer. Cost per
+  /// iteration (bench_solver solver/chebyshev, 1 thread, fastest of 10-15 repetitions on a
+  /// 2-core machine under a load of 7-9, so only indicative): cloth256 +2 to +5 %, tetbar200k
+  /// +16 to +26 %, which three more loads and stores per particle cannot explain; measure
+  /// again on a quiet machine before relying on it. Larger ρ converge faster
+  /// in long solves (ρ = 0.99: 14 / 21 / 37 and 15 / 24 / 30) but made 60-frame runs of the
+  /// cloth diverge (chebyshev_report --frames: ρ = 0.99 at 4 substeps × 8 and 8 × 4, ρ = 0.95
+  /// at 8 × 4), and delay 1 made 16 × 2 diverge even at ρ = 0.9 (the last iteration of every
+  /// substep then overshoots by ω₂ = 1.68 and the velocity update keeps it). ρ = 0.9 with
+  /// delay 2 was stable and ended with a lower residual than plain Jacobi at 16 × 3, 8 × 4,
+  /// 8 × 6, 4 × 8, 2 × 16 and 1 × 32 on the cloth and the bar, and solves of 1 or 2
+  /// iterations (the tool's 16 × 2) are exactly plain Jacobi. It is not the default because
+  /// the extrapolation breaks two things plain Jacobi gets right: unilateral constraints (a
+  /// particle–tet contact in the Jacobi set is extrapolated through the surface: 6 mm of
+  /// penetration where plain Jacobi leaves < 2 mm, parallel.Contacts test), and a damped
+  /// 2×2×10 bar at 100 iterations per step settles 0.37 away from the sequential solver's
+  /// shape instead of < 0.08 (parallel.Solver.ModesReachTheSameRestShape).
+  bool chebyshev = kDefaultChebyshev;
+  Real chebyshev_rho = kDefaultChebyshevRho;
+  std::size_t chebyshev_delay = kDefaultChebyshevDelay;
   /// Constraints per parallel work block and the hybrid mode's colour-size threshold.
   std::size_t block_size = kDefaultBlockSize;
   std::size_t hybrid_threshold = kDefaultHybridThreshold;
@@ -124,7 +167,8 @@ class Solver {
   /// Builds the schedule of `model` from `colouring` (which must colour
   /// constraint_graph(model)). Mode sequential ignores the colouring. Throws InvalidInput
   /// for bad settings (time step ≤ 0 or not finite, 0 substeps, damping < 0, ω outside
-  /// (0, 2), block size 0) or a colouring that does not fit the model.
+  /// (0, 2), Chebyshev ρ outside (0, 1) or delay 0, block size 0) or a colouring that does
+  /// not fit the model.
   Solver(Model model, const Colouring& colouring, const SolverSettings& settings);
   /// Mode sequential only (no colouring needed); InvalidInput for any other mode.
   Solver(Model model, const SolverSettings& settings);
@@ -205,11 +249,15 @@ class Solver {
   void run_stage(const Stage& stage, const ProjectionSettings& projection);
   ConstraintSets& batches_of(StageSet set);
   std::span<const ScheduleBlock> blocks_of(const Stage& stage) const;
-  void iterate(const ProjectionSettings& projection);
+  /// The `iteration`th (1-based) iteration of a solve (a substep's or a project() call's).
+  void iterate(const ProjectionSettings& projection, std::size_t iteration);
   void jacobi_projection(JacobiSet& jacobi, JacobiWork& work,
                          std::span<const ScheduleBlock> blocks,
                          const ProjectionSettings& projection);
-  void jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work);
+  /// chebyshev: the schedule's set, accelerated (see SolverSettings::chebyshev) in the
+  /// `iteration`th (1-based) iteration of a solve.
+  void jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work,
+                        bool chebyshev = false);
   template <class Body>
   void parallel_chunks(std::size_t count, std::size_t chunk, Body&& body);
 
@@ -225,6 +273,11 @@ class Solver {
   /// the slots are the caller's order).
   std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> dynamic_source_;
   std::vector<Stage> stages_, velocity_stages_;
+  /// Chebyshev acceleration: the schedule's Jacobi set's particles (JacobiSet::particles
+  /// order) one iteration before the last, the iteration under way and its weight ω.
+  std::array<AlignedVector<Real>, 3> chebyshev_previous_;
+  std::size_t chebyshev_iteration_ = 0;
+  Real chebyshev_weight_ = 1;
   std::size_t dynamic_count_ = 0;
   /// The time step of the last projections (step: the substep; project: its dt), which the
   /// XPBD residual C + α̃λ is measured at.

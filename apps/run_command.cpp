@@ -62,9 +62,9 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
   add_scene_options(*command, options.scene);
   command->add_option("--frames", options.frames, "time steps to simulate (default 60)")
       ->check(integer_from(0, std::size_t(1) << 31));
-  command->add_option("--substeps", options.substeps, "substeps per frame (default 16)")
+  command->add_option("--substeps", options.substeps, "substeps per frame (default 32)")
       ->check(integer_from(1, std::size_t(1) << 20));
-  command->add_option("--iterations", options.iterations, "projection sweeps per substep (default 2)")
+  command->add_option("--iterations", options.iterations, "projection sweeps per substep (default 1)")
       ->check(integer_from(1, std::size_t(1) << 20));
   command->add_option("--dt", options.time_step, "seconds per frame (default 1/60)")
       ->check(finite_number_above(0, false, "seconds"));

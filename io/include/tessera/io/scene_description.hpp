@@ -63,10 +63,12 @@ inline constexpr std::array<std::string_view, 2> kTetherRuleNames = {"auto", "no
 struct SimulationSettings {
   Vector3r gravity = Vector3r(0, Real(-9.81), 0);
   Real time_step = Real(1) / Real(60);
-  /// Many substeps of few iterations: for the same number of projections, 16 × 2 leaves a
-  /// 128² cloth 7× less stretched than 4 × 10 (XPBD's "small steps" observation).
-  std::size_t substeps = 16;
-  std::size_t iterations = 2;
+  /// Many substeps of one iteration (XPBD's "small steps"): for the same number of sweeps,
+  /// substeps beat iterations. On the default scene (256² cloth with tethers, 60 frames) 32 × 1
+  /// costs what 16 × 2 does and ends with the residual RMS 0.036 instead of 0.056 and the
+  /// largest 0.58 instead of 3.5 (16 × 4: 0.032 / 0.59 for 1.6× the time).
+  std::size_t substeps = 32;
+  std::size_t iterations = 1;
   std::size_t frames = 60;
   Real velocity_damping = 0;
   /// Chebyshev acceleration of mode jacobi and its ρ (SolverSettings::chebyshev,

@@ -1,7 +1,7 @@
 // Validation at the door: every make_<family>_constraints function checks its plain input here
 // before building SoA batches, so the hot loops never check anything. Messages name the
 // family, the constraint's position in the input and the problem, e.g.
-//   "distance constraint 17: particle index 99 is out of range (50 particles)".
+//   "<family> constraint 17: particle index 99 is out of range (50 particles)".
 #pragma once
 
 #include <array>

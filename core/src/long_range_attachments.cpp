@@ -109,7 +109,11 @@ TetherConstraints make_long_range_attachments(std::span<const Vector3r> rest_pos
     reach.push_back(d);
   }
   return make_tether_constraints(
-      {pairs, rest_positions, reach, options.stiffness, options.compliance});
+      {.particles = pairs,
+       .rest_positions = rest_positions,
+       .max_distances = reach,
+       .stiffness = options.stiffness,
+       .compliance = options.compliance});
 }
 
 }  // namespace tessera

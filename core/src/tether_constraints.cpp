@@ -63,14 +63,16 @@ TetherConstraints make_tether_constraints(const TetherConstraintInput& input) {
   TetherConstraints result;
   result.particles = validator.particles<2>(input.particles);
   const std::size_t n = result.size();
-  const bool given = !input.max_distance.empty();
-  if (given && input.max_distance.size() != n)
-    validator.fail_input(std::to_string(input.max_distance.size()) + " reaches for " +
+  const bool given = !input.max_distances.empty();
+  if (given && input.max_distances.size() != n)
+    validator.fail_input(std::to_string(input.max_distances.size()) + " reaches for " +
                          std::to_string(n) + " tethers");
   result.max_distance = detail::filled(n, 0);
   for (std::size_t c = 0; c < n; ++c) {
     const auto [p0, p1] = validator.rest_points<2>(result.particles, input.rest_positions, c);
-    const Real reach = given ? input.max_distance[c] : (p0 - p1).norm();
+    const Real reach = given                    ? input.max_distances[c]
+                       : input.max_distance != 0 ? input.max_distance
+                                                 : (p0 - p1).norm();
     validator.check_positive(c, "reach", reach);
     result.max_distance[c] = reach;
   }

@@ -193,15 +193,17 @@ struct Family<ParticleTetContacts> {
   static auto parameters() { return std::tuple{}; }
 };
 
-/// Tethers from Python reach their rest distance (rest= positions, or the model's); the
-/// geodesic long-range attachments of a mesh are C++'s make_long_range_attachments.
+/// Tethers from Python reach their rest distance (rest= positions, or the model's) unless
+/// max_distance= gives the reach (one number, or one per tether); the geodesic long-range
+/// attachments of a mesh are what tessera.scene() adds (C++: make_long_range_attachments).
 template <>
 struct Family<TetherConstraints> {
   using Batch = TetherConstraints;
   using Input = TetherConstraintInput;
   static Batch make(const Input& input) { return make_tether_constraints(input); }
   static auto parameters() {
-    return std::tuple{TESSERA_REAL(stiffness, true), TESSERA_REAL(compliance, true)};
+    return std::tuple{TESSERA_REAL(max_distance, true), TESSERA_REAL(stiffness, true),
+                      TESSERA_REAL(compliance, true)};
   }
 };
 

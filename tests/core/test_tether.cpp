@@ -110,7 +110,11 @@ TetherConstraints build(const test::DisjointConstraintSet<2>& set, Random& rando
     const auto p = set.points(c);
     reach[c] = (p[0] - p[1]).norm() * random.uniform(Real(0.6), Real(1.4));
   }
-  return make_tether_constraints({set.indices, set.positions, reach, Real(0.8), Real(1e-4)});
+  return make_tether_constraints({.particles = set.indices,
+                                  .rest_positions = set.positions,
+                                  .max_distances = reach,
+                                  .stiffness = Real(0.8),
+                                  .compliance = Real(1e-4)});
 }
 
 void project_scalar(const test::DisjointConstraintSet<2>& set, const TetherConstraints& b,
@@ -173,7 +177,15 @@ TEST(TetherBatchValidation, NamesTheTetherAndTheProblem) {
   EXPECT_NE(error_of({ok, rest, negative}).find("tether constraint 0: reach is -1"),
             std::string::npos);
   EXPECT_NE(error_of({ok, rest, two}).find("2 reaches for 1 tethers"), std::string::npos);
-  EXPECT_NE(error_of({ok, rest, {}, Real(-1)}).find("stiffness"), std::string::npos);
+  EXPECT_NE(error_of({.particles = ok, .rest_positions = rest, .stiffness = Real(-1)}).find("stiffness"),
+            std::string::npos);
+  EXPECT_NE(error_of({.particles = ok, .rest_positions = rest, .max_distance = Real(-2)})
+                .find("tether constraint 0: reach is -2"),
+            std::string::npos);
+  // One reach for every tether.
+  EXPECT_EQ(make_tether_constraints({.particles = ok, .rest_positions = rest, .max_distance = 3})
+                .max_distance[0],
+            3);
   EXPECT_NO_THROW(make_tether_constraints({ok, rest}));
 }
 

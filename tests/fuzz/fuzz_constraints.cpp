@@ -188,8 +188,12 @@ void add_family(Bytes& in, const Decoded& d, ConstraintSets& sets) {
       for (std::size_t c = 0; c < p.size() / 2 + (in.byte() % 8 == 0 ? 1 : 0); ++c)
         reach.push_back(in.value());
       sets.tether = make_tether_constraints(
-          {p, rest, in.byte() % 2 ? std::span<const Real>(reach) : std::span<const Real>(),
-           in.value(), in.value()});
+          {.particles = p,
+           .rest_positions = rest,
+           .max_distances = in.byte() % 2 ? std::span<const Real>(reach) : std::span<const Real>(),
+           .max_distance = in.byte() % 2 ? in.value() : Real(0),
+           .stiffness = in.value(),
+           .compliance = in.value()});
       break;
     }
   }

@@ -16,6 +16,7 @@
 
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/core/error.hpp>
+#include <tessera/core/long_range_attachments.hpp>
 #include <tessera/io/mesh_readers.hpp>
 #include <tessera/parallel/solver.hpp>
 
@@ -338,6 +339,54 @@ TEST(ErrorCatalogue, OverflowingStepIsNumericalFailure) {
               "solver: step 1 made particle 0 non-finite; positions and velocities are restored "
               "to before it (check the time step, compliance and velocities)");
   }
+}
+
+TEST(ErrorCatalogue, TetherAndLongRangeAttachmentInput) {
+  const std::vector<Vector3r> rest = {Vector3r(0, 0, 0), Vector3r(1, 0, 0)};
+  const std::vector<ParticleIndex> pair = {0, 1};
+  const std::vector<Real> negative = {-1}, two = {1, 1};
+  EXPECT_EQ(invalid_input([&] { make_tether_constraints({pair, rest, negative}); }),
+            "tether constraint 0: reach is -1, must be positive");
+  EXPECT_EQ(invalid_input([&] { make_tether_constraints({pair, rest, two}); }),
+            "tether constraints: 2 reaches for 1 tethers");
+  const std::vector<Real> masses = {0, 1};
+  const std::vector<ParticleIndex> odd = {0, 1, 1};
+  EXPECT_EQ(invalid_input([&] { make_long_range_attachments(rest, masses, odd); }),
+            "long-range attachments: 3 edge indices is not a whole number of edges (2 each)");
+}
+
+TEST(ErrorCatalogue, DivergenceBoundAndADivergedStep) {
+  const Model small = test::cloth_model(3, 3);
+  SolverSettings settings;
+  settings.divergence_rms = 0;
+  EXPECT_EQ(invalid_input([&] { Solver(small, test::colour_model(small), settings); }),
+            "solver settings: divergence bound must be positive (got 0.000000; infinity turns "
+            "the check off)");
+  // A 64² distance cloth swept in input order at 16 × 1 diverges (parallel.SequentialOrder).
+  settings = SolverSettings{};
+  settings.mode = SolverMode::sequential;
+  settings.sequential_order = SequentialOrder::input;
+  settings.substeps = 16;
+  settings.iterations = 1;
+  settings.divergence_rms = 2;
+  Solver solver(test::cloth_model(64, 64, test::ClothBending::none), settings);
+  std::string message;
+  for (int frame = 0; frame < 60 && message.empty(); ++frame) {
+    try {
+      solver.step();
+    } catch (const NumericalFailure& failure) {
+      message = failure.what();
+    }
+  }
+  const std::string tail =
+      "; positions and velocities are restored to before it (more substeps or iterations, a "
+      "smaller time step, or SolverSettings::divergence_rms)";
+  ASSERT_GT(message.size(), tail.size()) << message;
+  EXPECT_EQ(message.rfind("solver: step ", 0), 0u) << message;
+  EXPECT_NE(message.find(" diverged: residual RMS "), std::string::npos) << message;
+  EXPECT_NE(message.find(" exceeds the bound 2; the largest, "), std::string::npos) << message;
+  EXPECT_NE(message.find(", is distance constraint "), std::string::npos) << message;
+  EXPECT_EQ(message.substr(message.size() - tail.size()), tail);
 }
 
 // ---- files --------------------------------------------------------------------------------

@@ -1,5 +1,6 @@
 // The tessera tool end to end: each test runs the built program with arguments, as a shell
 // user would, and checks its exit code, stdout and stderr.
+#include <algorithm>
 #include <sys/wait.h>
 
 #include <array>
@@ -136,6 +137,43 @@ TEST_F(Cli, RunSummaryHoldsEveryKey) {
   EXPECT_EQ(text.exit_code, 0);
   EXPECT_NE(text.out.find("state_hash"), std::string::npos);
   EXPECT_NE(text.out.find("colour_lower_bound"), std::string::npos);
+  // The residual of each family the scene has, tethers included (auto for a pinned scene).
+  for (const char* family : {"distance", "dihedral", "tether"})
+    for (const char* measure : {"rms", "max"}) {
+      const std::string key = std::string("residual_") + family + "_" + measure + "_final";
+      EXPECT_TRUE(summary.contains(key)) << key;
+    }
+  EXPECT_FALSE(summary.contains("residual_volume_rms_final")) << "only the scene's families";
+  EXPECT_EQ(run_json({"run", "cloth:12x10", "--frames", "1", "--tethers", "none"})
+                .contains("residual_tether_rms_final"),
+            false);
+}
+
+// Divergence is a failure: the input order at 16 x 1 diverges on a 64² distance cloth; with
+// a bound of 2 the run stops with one line and exit code 1, and nothing prints null.
+TEST_F(Cli, DivergenceIsANumericalFailureWithExitCodeOne) {
+  const std::vector<std::string> base = {"run", "cloth:64x64", "--bending", "none", "--tethers",
+                                         "none", "--mode", "sequential", "--sequential-order",
+                                         "input", "--substeps", "16", "--frames", "30", "--json"};
+  std::vector<std::string> bounded = base;
+  bounded.insert(bounded.end(), {"--divergence-rms", "2"});
+  const Outcome failed = run(bounded);
+  EXPECT_EQ(failed.exit_code, 1);
+  EXPECT_EQ(failed.out, "");
+  EXPECT_NE(failed.err.find("tessera run: solver: step "), std::string::npos) << failed.err;
+  EXPECT_NE(failed.err.find(" diverged: residual RMS "), std::string::npos) << failed.err;
+  EXPECT_EQ(std::count(failed.err.begin(), failed.err.end(), '\n'), 1);
+  // Unbounded, the same run ends with huge but finite numbers: no null anywhere.
+  std::vector<std::string> unbounded = base;
+  unbounded.insert(unbounded.end(), {"--divergence-rms", "inf"});
+  const Outcome diverged = run(unbounded);
+  EXPECT_EQ(diverged.exit_code, 0) << diverged.err;
+  EXPECT_EQ(diverged.out.find("null"), std::string::npos) << diverged.out;
+  EXPECT_GT(Json::parse(diverged.out)["residual_rms_final"].get<double>(), 2);
+  // The groups order (the default) stays bounded under the default bound.
+  std::vector<std::string> groups = base;
+  groups[9] = "groups";
+  EXPECT_EQ(run(groups).exit_code, 0);
 }
 
 TEST_F(Cli, OneAndTwoThreadsGiveTheSameState) {
@@ -281,6 +319,9 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
       {{"run", "--chebyshev", "maybe"}, "tessera run: --chebyshev: unknown value 'maybe' (known: on, off)"},
       {{"run", "--chebyshev-rho", "1"}, "tessera run: --chebyshev-rho: must be a number in (0, 1), not '1'"},
       {{"run", "--mode", "fast"}, "tessera run: unknown solver mode 'fast' (known: gs, jacobi, hybrid, sequential)"},
+      {{"run", "--tethers", "some"}, "tessera run: --tethers: unknown value 'some' (known: auto, none)"},
+      {{"run", "--sequential-order", "random"}, "tessera run: unknown sequential order 'random' (known: groups, input)"},
+      {{"run", "--divergence-rms", "0"}, "tessera run: --divergence-rms: must be a number above 0 or inf, not '0'"},
       {{"run", "--strategy", "nope"}, "tessera run: unknown colouring strategy 'nope' " + strategies},
       {{"run", "--pins", "left"}, "tessera run: --pins: unknown pin rule 'left' (known: default, none, lowest-x, lowest-y, lowest-z, highest-x, highest-y, highest-z)"},
       {{"run", "--bending", "floppy"}, "tessera run: --bending: unknown value 'floppy' (known: dihedral, isometric, none)"},

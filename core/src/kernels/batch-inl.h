@@ -72,7 +72,7 @@ HWY_INLINE std::uint64_t mask_bits(const LaneMask& mask) {
 
 /// x[index] = position + correction for the active lanes whose particle is movable.
 /// On AVX-512 this is a masked hardware scatter (measured 8 % faster than the scalar loop on
-/// the distance kernel); the intrinsics stay here, in the one place that scatters.
+/// a two-particle kernel); the intrinsics stay here, in the one place that scatters.
 HWY_INLINE void scatter_corrected(ParticleArrays& particles, const ParticleIndex* indices,
                                   const ParticleLanes& lanes, const Vec3<RealLanes>& correction,
                                   const LaneMask& active) {

@@ -110,7 +110,7 @@ class ConstraintGraph {
   ConstraintIndex group_first_constraint(std::size_t g) const { return group_first_[g]; }
   /// The group holding constraint c (binary search over the group starts).
   std::size_t group_of(ConstraintIndex c) const;
-  /// "constraint group 'distance', constraint 17" for global id c.
+  /// "constraint group '<family>', constraint 17" for global id c.
   std::string describe_constraint(ConstraintIndex c) const;
 
  private:

@@ -69,7 +69,7 @@ FEMTetraConstraints make_fem_tetra_constraints(const FEMTetraConstraintInput& in
 /// Projects constraints [begin, end) once, W at a time on the active SIMD target: PBD with
 /// (youngs_modulus, poisson_ratio) under stiffness semantics, XPBD with (poisson_ratio,
 /// compliance, λ) under compliance semantics. Same range rules as
-/// project_distance_constraints.
+/// every batched kernel (constraint_batch.hpp).
 void project_fem_tetra_constraints(ParticleArrays particles, FEMTetraConstraints& constraints,
                                    std::size_t begin, std::size_t end,
                                    const ProjectionSettings& settings);

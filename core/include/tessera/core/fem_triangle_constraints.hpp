@@ -65,7 +65,7 @@ FEMTriangleConstraints make_fem_triangle_constraints(const FEMTriangleConstraint
 
 /// Projects constraints [begin, end) once, W at a time on the active SIMD target. The family
 /// has no XPBD form: it is projected with the PBD rule under either semantics. Same range
-/// rules as project_distance_constraints.
+/// rules as every batched kernel (constraint_batch.hpp).
 void project_fem_triangle_constraints(ParticleArrays particles,
                                       FEMTriangleConstraints& constraints, std::size_t begin,
                                       std::size_t end, const ProjectionSettings& settings);

@@ -61,7 +61,7 @@ StrainTetraConstraints make_strain_tetra_constraints(const StrainTetraConstraint
 
 /// Projects constraints [begin, end) once, W at a time on the active SIMD target. The family
 /// has no XPBD form: it projects with its PBD stiffnesses under either semantics. Same range
-/// rules as project_distance_constraints.
+/// rules as every batched kernel (constraint_batch.hpp).
 void project_strain_tetra_constraints(ParticleArrays particles,
                                       StrainTetraConstraints& constraints, std::size_t begin,
                                       std::size_t end, const ProjectionSettings& settings);

@@ -18,10 +18,12 @@ struct TetherConstraintInput {
   /// Two particle indices per tether: the tethered particle, then its attachment.
   std::span<const ParticleIndex> particles;
   /// Rest position of every particle: a tether's reach is its rest distance |p0 − p1| here,
-  /// unless max_distance is given.
+  /// unless a reach is given.
   std::span<const Vector3r> rest_positions;
-  /// The reach d > 0 of every tether (one per tether), or empty for the rest distances.
-  std::span<const Real> max_distance = {};
+  /// The reach d > 0 of every tether (one per tether), or empty: then every tether reaches
+  /// max_distance, or its rest distance where max_distance is 0.
+  std::span<const Real> max_distances = {};
+  Real max_distance = 0;
   /// PBD stiffness k ∈ [0, 1] and XPBD compliance α ≥ 0 of every tether.
   Real stiffness = 1;
   Real compliance = 0;
@@ -58,8 +60,8 @@ struct TetherConstraints {
 /// negative or not finite.
 TetherConstraints make_tether_constraints(const TetherConstraintInput& input);
 
-/// Projects tethers [begin, end) once, W at a time on the active SIMD target (the same
-/// conditions as project_distance_constraints).
+/// Projects tethers [begin, end) once, W at a time on the active SIMD target (the range rules
+/// of every batched kernel, constraint_batch.hpp).
 void project_tether_constraints(ParticleArrays particles, TetherConstraints& constraints,
                                 std::size_t begin, std::size_t end,
                                 const ProjectionSettings& settings);

@@ -1,7 +1,7 @@
 // The schedule: a model's constraints laid out colour-major for the solver, built once.
 //
 //   user batches (input order)           scheduled batches (one per family)
-//   distance: d0 d1 d2 d3 d4 ...   ──►   | colour 0 ......|pad| colour 1 ...|pad| colour 2 ..
+//   family f: c0 c1 c2 c3 c4 ...   ──►   | colour 0 ......|pad| colour 1 ...|pad| colour 2 ..
 //                                          ▲ every colour starts on a kMaxLanes boundary, so
 //                                            work blocks of one colour never share a vector
 //   a colour's phase = its blocks of every family: [family, begin, end) ranges of at most

@@ -3,6 +3,7 @@
 
     bench_accuracy.py --tessera PATH --out DIR [--quick] [--scenes S,...] [--grid SxK,...]
                       [--modes M,...] [--tethers auto,none] [--threads T] [--timeout S]
+    bench_accuracy.py --out DIR --redraw     (accuracy.md and .png again from accuracy.json)
 
 Runs `tessera run SCENE --json` over a grid of scenes × substeps × iterations × modes ×
 tethers, always for 1 s of simulated time (60 frames at the default dt of 1/60), and records
@@ -46,12 +47,12 @@ def grid(text):
 
 # (scene, grid, modes, tethers): the full plan and the --quick one.
 FULL_PLAN = [
-    (DEFAULT_SCENE, grid("8x4,16x2,32x1,64x1,16x4,32x2"), ["gs", "jacobi", "hybrid"], ["auto", "none"]),
+    (DEFAULT_SCENE, grid("16x2,32x1,64x1,32x2"), ["gs", "jacobi", "hybrid"], ["auto", "none"]),
+    (DEFAULT_SCENE, grid("8x4,16x4"), ["gs"], ["auto", "none"]),
     (DEFAULT_SCENE, grid("32x1"), ["sequential"], ["auto", "none"]),
-    ("bar:10x10x40", grid("8x4,16x2,32x1,64x1,16x4,32x2"), ["gs", "jacobi", "hybrid"], ["auto", "none"]),
+    ("bar:10x10x40", grid("8x4,16x2,32x1,64x1,32x2"), ["gs", "jacobi", "hybrid"], ["auto", "none"]),
     ("bar:10x10x40", grid("16x2,32x1"), ["sequential"], ["auto", "none"]),
-    ("cloth:1024x1024", grid("32x1"), ["gs"], ["auto", "none"]),
-    ("cloth:1024x1024", grid("32x1"), ["jacobi"], ["auto"]),
+    ("cloth:1024x1024", grid("32x1"), ["gs"], ["auto"]),
 ]
 QUICK_PLAN = [
     ("cloth:64x64", grid("16x2,32x1,64x1"), MODES, ["auto", "none"]),
@@ -201,6 +202,11 @@ def plot(rows, path, dpi):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
+    from matplotlib.ticker import FuncFormatter
+    plain = FuncFormatter(lambda value, _: f"{value:g}")   # 20, not 2×10^1
+    # Minor ticks: only 2× and 5× the decade are labelled.
+    some = FuncFormatter(lambda value, _: f"{value:g}" if value > 0 and round(
+        value / 10 ** math.floor(math.log10(value))) in (2, 5) else "")
 
     scenes = list(dict.fromkeys(r["scene"] for r in rows if ok(r)))
     if not scenes:
@@ -228,6 +234,8 @@ def plot(rows, path, dpi):
             axis.axhline(MAX_STRETCH, color="grey", linestyle=":", linewidth=1)
         axis.set_xscale("log")
         axis.set_yscale("log")
+        axis.xaxis.set_major_formatter(plain)
+        axis.xaxis.set_minor_formatter(some)
         axis.set_title(scene)
         axis.set_xlabel("wall seconds per simulated second")
         axis.grid(True, which="both", linewidth=0.3, alpha=0.5)
@@ -237,7 +245,7 @@ def plot(rows, path, dpi):
                 Line2D([], [], marker="s", color="grey", markerfacecolor="none", linestyle="none",
                        label="tethers none")]
     axes[0][-1].legend(handles=handles, fontsize=8, loc="best")
-    figure.suptitle("Accuracy per second: Pareto front per mode (lower left is better)")
+    figure.suptitle("Accuracy per second: Pareto front per mode (lower left is better)", fontsize=10 if len(scenes) > 1 else 8)
     figure.tight_layout()
     figure.savefig(path, dpi=dpi)
     plt.close(figure)
@@ -257,8 +265,14 @@ def main():
     parser.add_argument("--frames", type=int, default=60, help=argparse.SUPPRESS)  # test hook
     parser.add_argument("--timeout", type=float, default=900, help="seconds per run")
     parser.add_argument("--dpi", type=int, default=100)
+    parser.add_argument("--redraw", action="store_true",
+                        help="rewrite accuracy.md and accuracy.png from DIR/accuracy.json, running nothing")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    if args.redraw:
+        with open(os.path.join(args.out, "accuracy.json")) as file:
+            saved = json.load(file)
+        return write_reports(saved["runs"], saved.get("meta", {}), args)
 
     plan = QUICK_PLAN if args.quick else FULL_PLAN
     if args.scenes or args.grid or args.modes or args.tethers:
@@ -299,6 +313,10 @@ def main():
             "wall time (s)": round(time.monotonic() - started)}
     with open(os.path.join(args.out, "accuracy.json"), "w") as file:
         json.dump({"meta": meta, "runs": rows}, file, indent=1)
+    return write_reports(rows, meta, args)
+
+
+def write_reports(rows, meta, args):
     text = markdown(rows, meta)
     with open(os.path.join(args.out, "accuracy.md"), "w") as file:
         file.write(text)

@@ -103,6 +103,7 @@ def run_one(tessera, scene, substeps, iterations, mode, tethers, frames, threads
         distance_rms=summary.get("residual_distance_rms_final"),
         distance_max=summary.get("residual_distance_max_final"),
         constraints=summary.get("constraints"),
+        colours=summary.get("colours"),
         state_hash=summary.get("state_hash"),
     )
     for key, value in summary.items():   # every family's residual, for the JSON

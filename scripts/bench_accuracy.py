@@ -28,6 +28,7 @@ import json
 import math
 import os
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -270,6 +271,8 @@ def main():
                         help="rewrite accuracy.md and accuracy.png from DIR/accuracy.json, running nothing")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    # Killed (SIGTERM): unwind through subprocess.run, which then kills the running tool too.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     if args.redraw:
         with open(os.path.join(args.out, "accuracy.json")) as file:
             saved = json.load(file)

@@ -10,6 +10,8 @@ Reads whatever of these RESULTS_DIR holds (Google Benchmark JSON unless said oth
   scaling.json      solver_size/gs/<kind>:<size>/threads:<T>  (bench_solver)
   coloring.json     coloring/<strategy>/<mesh>           (bench_coloring)
   convergence.json  residual per iteration               (convergence_report, its own JSON)
+  accuracy.md       table of the accuracy set (scripts/bench_accuracy.py), copied into
+                    summary.md with accuracy.png
 and writes into RESULTS_DIR (or DIR) one PNG per plot it has data for (kernels.png,
 solver_scaling.png, size_scaling.png, coloring.png, convergence.png) and summary.md with the
 figures, including the fraction of the bandwidth ceiling the solver reaches.
@@ -468,6 +470,15 @@ def main():
     if convergence:
         section("Convergence", "convergence.png",
                 plot_convergence(convergence, os.path.join(target, "convergence.png"), args.dpi))
+
+    # The accuracy set writes its own table and plot (scripts/bench_accuracy.py): linked here.
+    accuracy_md = os.path.join(directory, "accuracy.md")
+    if os.path.exists(accuracy_md):
+        with open(accuracy_md) as file:
+            body = file.read().split("\n", 1)[1].strip()   # without its "# Accuracy per second"
+        png = "accuracy.png" if os.path.exists(os.path.join(directory, "accuracy.png")) else None
+        out.extend(["## Accuracy per second", ""] + ([f"![Accuracy per second]({png})", ""] if png else [])
+                   + [body, ""])
 
     with open(os.path.join(target, "summary.md"), "w") as file:
         file.write("\n".join(out))

@@ -330,7 +330,14 @@ SceneDescription parse_scene_spec(std::string_view spec) {
   if (generator("cloth")) {
     description.source = SceneSource::cloth;
     if (spec.size() > 5) {
-      const std::string_view sizes = spec.substr(6);
+      std::string_view sizes = spec.substr(6);
+      // "cloth:CxR:alternating": the chequerboard diagonals (DiagonalPattern::alternating).
+      constexpr std::string_view kAlternating = ":alternating";
+      if (sizes.size() > kAlternating.size() &&
+          sizes.substr(sizes.size() - kAlternating.size()) == kAlternating) {
+        sizes.remove_suffix(kAlternating.size());
+        description.cloth_diagonals = DiagonalPattern::alternating;
+      }
       std::size_t both[2] = {0, 0};
       if (parse_sizes(sizes, both, 2)) {
       } else if (parse_sizes(sizes, both, 1)) {

@@ -359,9 +359,10 @@ struct PinnedMesh {
 
 /// The default cloth (make_cloth_scene): 1 m wide in the xz plane, hung from the two corners
 /// of its last row.
-PinnedMesh cloth_mesh(std::size_t columns, std::size_t rows) {
+PinnedMesh cloth_mesh(std::size_t columns, std::size_t rows, DiagonalPattern diagonals) {
   ClothGrid grid = columns < 2 ? make_cloth_grid(columns, rows)  // reports the size
-                               : make_cloth_grid(columns, rows, Real(1) / Real(columns - 1));
+                               : make_cloth_grid(columns, rows, Real(1) / Real(columns - 1),
+                                                 diagonals);
   for (Vector3r& p : grid.positions) p = Vector3r(p.x(), 0, p.y());
   PinnedMesh cloth;
   cloth.mesh.positions = std::move(grid.positions);
@@ -418,7 +419,7 @@ Model make_solid(std::span<const Vector3r> positions, std::span<const VertexInde
 
 Model make_cloth_scene(std::size_t columns, std::size_t rows, const ShellOptions& options) {
   const std::string context = "cloth scene";
-  const PinnedMesh cloth = with_context(context, [&] { return cloth_mesh(columns, rows); });
+  const PinnedMesh cloth = with_context(context, [&] { return cloth_mesh(columns, rows, DiagonalPattern::uniform); });
   return shell_in(context, cloth.mesh.positions, cloth.mesh.triangles, cloth.pinned, options);
 }
 
@@ -530,7 +531,8 @@ Scene build_scene(const SceneDescription& description) {
   std::vector<VertexIndex> default_pins;
   switch (description.source) {
     case SceneSource::cloth: {
-      PinnedMesh cloth = cloth_mesh(description.cloth_columns, description.cloth_rows);
+      PinnedMesh cloth = cloth_mesh(description.cloth_columns, description.cloth_rows,
+                                    description.cloth_diagonals);
       mesh = std::move(cloth.mesh);
       default_pins = std::move(cloth.pinned);
       break;

@@ -44,6 +44,12 @@ TEST(SceneSpec, GeneratorsWithAndWithoutSizes) {
   EXPECT_EQ(cloth.cloth_columns, 20u);
   EXPECT_EQ(cloth.cloth_rows, 7u);
   EXPECT_EQ(cloth.name, "cloth:20x7");
+  EXPECT_EQ(cloth.cloth_diagonals, DiagonalPattern::uniform);
+  cloth = parse_scene_spec("cloth:20x7:alternating");
+  EXPECT_EQ(cloth.cloth_columns, 20u);
+  EXPECT_EQ(cloth.cloth_rows, 7u);
+  EXPECT_EQ(cloth.cloth_diagonals, DiagonalPattern::alternating);
+  EXPECT_EQ(parse_scene_spec("cloth:9:alternating").cloth_rows, 9u);
   const SceneDescription bar = parse_scene_spec("bar:2x3x4");
   EXPECT_EQ(bar.source, SceneSource::bar);
   EXPECT_EQ(bar.bar_cells, (std::array<std::size_t, 3>{2, 3, 4}));
@@ -183,6 +189,19 @@ TEST(BuildScene, ClothHangsFromTwoCornersByDefault) {
   EXPECT_GT(scene.model.constraints.dihedral.size(), 0u);
   for (std::size_t p = 0; p < 20; ++p)
     EXPECT_EQ(scene.model.particles.inverse_mass[p] == 0, p == 15 || p == 19) << p;
+}
+
+TEST(BuildScene, ClothDiagonalsAreAnOptionOfTheSpec) {
+  // The same vertices and pins, the triangles of make_cloth_grid's alternating pattern.
+  const Scene uniform = build_scene(parse_scene_spec("cloth:5x4"));
+  const Scene alternating = build_scene(parse_scene_spec("cloth:5x4:alternating"));
+  EXPECT_EQ(alternating.pinned, uniform.pinned);
+  EXPECT_EQ(alternating.mesh.positions, uniform.mesh.positions);
+  EXPECT_NE(alternating.mesh.triangles, uniform.mesh.triangles);
+  EXPECT_EQ(alternating.mesh.triangles,
+            make_cloth_grid(5, 4, Real(0.25), DiagonalPattern::alternating).triangle_indices);
+  EXPECT_EQ(spec_error("cloth:5x4:diagonal"),
+            "scene 'cloth:5x4:diagonal': expected cloth:N or cloth:CxR with vertex counts, e.g. cloth:256x256");
 }
 
 TEST(BuildScene, PinnedScenesGetTethersToTheirNearestPin) {

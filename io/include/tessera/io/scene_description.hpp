@@ -91,6 +91,9 @@ struct SceneDescription {
   SceneSource source = SceneSource::cloth;
   /// cloth: vertices along x and along z; bar: cells along x, y, z.
   std::size_t cloth_columns = 64, cloth_rows = 64;
+  /// cloth: how each grid square is split (spec suffix ":alternating"; uniform by default,
+  /// which the pinned state hashes of cloth scenes assume).
+  DiagonalPattern cloth_diagonals = DiagonalPattern::uniform;
   std::array<std::size_t, 3> bar_cells{4, 4, 20};
   /// mesh: the file (any extension read_mesh knows).
   std::filesystem::path mesh_file;

@@ -55,7 +55,8 @@ PinRule parse_pin_rule(std::string_view text);
 std::string describe_pin_rule(const PinRule& rule);
 
 /// A scene on the command line: "cloth" (64 × 64 vertices), "cloth:N" (N × N),
-/// "cloth:CxR", "bar" (4 × 4 × 20 cells), "bar:XxYxZ", a path ending in .json (read as a
+/// "cloth:CxR" (either followed by ":alternating" for chequerboard diagonals,
+/// DiagonalPattern::alternating), "bar" (4 × 4 × 20 cells), "bar:XxYxZ", a path ending in .json (read as a
 /// scene file) or any other path (a mesh file, see read_mesh; not opened here). Sizes must be
 /// at least 2 vertices (cloth) or 1 cell (bar) per side, and at most 2^31 vertices in all.
 /// Throws InvalidInput naming the spec.

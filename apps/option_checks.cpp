@@ -8,6 +8,17 @@
 #include <sstream>
 
 namespace tessera::cli {
+namespace {
+
+/// The whole text as a number (strtod's forms, "inf" included); false for anything else.
+bool read_number(const std::string& text, double& value) {
+  char* end = nullptr;
+  errno = 0;
+  value = std::strtod(text.c_str(), &end);
+  return end != text.c_str() && *end == '\0' && errno == 0;
+}
+
+}  // namespace
 
 CLI::Validator integer_from(std::size_t low, std::size_t high) {
   const std::string wanted = "must be an integer from " + std::to_string(low) + " to " + std::to_string(high);
@@ -30,10 +41,8 @@ CLI::Validator finite_number_above(double low, bool low_inclusive, const std::st
                  : (low_inclusive ? " of at least " : " above ") + std::to_string(low);
   return CLI::Validator(
       [=](std::string& text) -> std::string {
-        char* end = nullptr;
-        errno = 0;
-        const double value = std::strtod(text.c_str(), &end);
-        const bool number = end != text.c_str() && *end == '\0' && errno == 0 && std::isfinite(value);
+        double value = 0;
+        const bool number = read_number(text, value) && std::isfinite(value);
         if (!number || !(low_inclusive ? value >= low : value > low))
           return wanted + ", not '" + text + "'";
         return {};
@@ -44,10 +53,8 @@ CLI::Validator finite_number_above(double low, bool low_inclusive, const std::st
 CLI::Validator positive_number_or_inf() {
   return CLI::Validator(
       [](std::string& text) -> std::string {
-        char* end = nullptr;
-        errno = 0;
-        const double value = std::strtod(text.c_str(), &end);
-        const bool number = end != text.c_str() && *end == '\0' && errno == 0 && !std::isnan(value);
+        double value = 0;
+        const bool number = read_number(text, value) && !std::isnan(value);
         if (!number || !(value > 0)) return "must be a number above 0 or inf, not '" + text + "'";
         return {};
       },
@@ -60,10 +67,8 @@ CLI::Validator finite_number_between(double low, double high) {
   const std::string wanted = range.str();
   return CLI::Validator(
       [=](std::string& text) -> std::string {
-        char* end = nullptr;
-        errno = 0;
-        const double value = std::strtod(text.c_str(), &end);
-        const bool number = end != text.c_str() && *end == '\0' && errno == 0 && std::isfinite(value);
+        double value = 0;
+        const bool number = read_number(text, value) && std::isfinite(value);
         if (!number || !(value > low && value < high)) return wanted + ", not '" + text + "'";
         return {};
       },

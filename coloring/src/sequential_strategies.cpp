@@ -15,7 +15,7 @@
 // All of them work on the implicit conflict graph: a constraint's neighbours are the other
 // constraints at its movable particles. "Degree" below is the conflict weight
 // Σ_p (deg(p) − 1) over the constraint's movable particles: the neighbour count when two
-// constraints share at most one particle (distance constraints on a mesh), an upper bound
+// constraints share at most one particle (the edges of a mesh), an upper bound
 // otherwise. It is what the particle CSR gives in O(arity) and what degrees drop by as
 // constraints are removed, which keeps smallest-last linear in Σ_p deg(p)².
 //

@@ -16,7 +16,7 @@ class PositionBasedDynamicsExtensions {
   /// of its attachment p1.
   ///   C(p0, p1) = |p0 - p1| - d ≤ 0,   ∇_{p0} C = n = (p0 - p1)/|p0 - p1|,  ∇_{p1} C = -n.
   /// Unilateral: while |p0 - p1| ≤ d the tether is inactive (false, zero corrections);
-  /// beyond it, the distance constraint's projection with stiffness k. Degenerate (false)
+  /// beyond it, the projection of C with stiffness k (as for an edge). Degenerate (false)
   /// when p0 and p1 coincide or both are static.
   static bool solve_TetherConstraint(const Vector3r& p0, Real invMass0, const Vector3r& p1,
                                      Real invMass1, const Real maxDistance,

@@ -43,7 +43,10 @@ double rms_after(Solver& solver, int frames) {
 
 TEST(SequentialOrder, GroupsStayBoundedWhereTheInputOrderDiverges) {
   // 64² distance-only cloth, 16 substeps × 1 iteration, 30 frames. Input order: the sweep
-  // runs along each row edge after edge, and the cloth's residual grows without bound.
+  // runs along each row edge after edge, and in float the cloth's residual grows without
+  // bound. In double the same input order needs longer to run away (RMS 0.36 after 30
+  // frames, above 2 within 60: robustness.ErrorCatalogue.DivergenceBoundAndADivergedStep),
+  // and the groups order ends at 0.92 here: under 1 in both precisions.
   const Model model = test::cloth_model(64, 64, test::ClothBending::none);
   SolverSettings settings = frame_settings(SolverMode::sequential, 1);
   settings.sequential_order = SequentialOrder::input;
@@ -53,7 +56,9 @@ TEST(SequentialOrder, GroupsStayBoundedWhereTheInputOrderDiverges) {
   Solver groups(model, settings);
   const double groups_rms = rms_after(groups, 30);
   EXPECT_LT(groups_rms, 1.0);
-  EXPECT_GT(input_rms, 10 * groups_rms) << "the divergence this order fixes";
+  if (!kDoublePrecision) {
+    EXPECT_GT(input_rms, 10 * groups_rms) << "the divergence this order fixes";
+  }
 }
 
 TEST(SequentialOrder, DihedralClothStaysBoundedOverSixtyFrames) {

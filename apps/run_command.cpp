@@ -133,8 +133,15 @@ int run_command(const RunOptions& options) {
 
   const std::size_t particles = scene.model.particles.size();
   const std::size_t pinned = scene.pinned.size();
+  const io::CollisionDescription& contacts = description.collisions;
+  std::optional<CollisionSettings> collisions;
+  if (contacts.enabled()) collisions = collision_settings(scene);
   Solver solver = colouring ? Solver(std::move(scene.model), colouring->colouring, settings)
                             : Solver(std::move(scene.model), settings);
+  if (collisions)
+    solver.set_collisions(*collisions, contacts.self_collision
+                                           ? std::span<const std::uint32_t>(scene.surface_triangles)
+                                           : std::span<const std::uint32_t>());
 
   if (output) output->write(0, 0.0, solver.positions());
   Residual initial, final;
@@ -181,6 +188,16 @@ int run_command(const RunOptions& options) {
     const std::string name(family_name(ConstraintFamily(f)));
     summary.add("residual_" + name + "_rms_final", family.rms);
     summary.add("residual_" + name + "_max_final", family.max);
+  }
+  if (const CollisionStage* stage = solver.collisions()) {
+    const CollisionStatistics& found = stage->statistics();
+    const std::vector<Vector3r> positions = solver.positions();
+    summary.add("contacts_mean", found.contacts_mean());
+    summary.add("contacts_max", found.contacts_max);
+    summary.add("seconds_collision", found.seconds_detection);
+    summary.add("penetration_max", double(penetration_depth(stage->settings().colliders, positions)));
+    summary.add("self_intersections",
+                count_self_intersections(positions, scene.surface_triangles));
   }
   summary.add("state_hash", state_hash(solver.positions()));
   if (output) {

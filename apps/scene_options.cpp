@@ -9,6 +9,8 @@
 
 #include <tessera/core/error.hpp>
 
+#include "option_checks.hpp"
+
 namespace tessera::cli {
 namespace {
 
@@ -26,8 +28,9 @@ Enum choose(const std::string& option, const std::string& value,
 
 void add_scene_options(CLI::App& command, SceneOptions& options) {
   command.add_option("scene", options.scene,
-                     "cloth, cloth:N, cloth:CxR (vertices), bar, bar:XxYxZ (cells), a mesh "
-                     "file (.obj, .node/.ele, .msh) or a scene file (.json)")
+                     "cloth, cloth:N, cloth:CxR (vertices), drape, drape:N (a cloth falling "
+                     "onto a sphere), bar, bar:XxYxZ (cells), a mesh file (.obj, .node/.ele, "
+                     ".msh) or a scene file (.json)")
       ->capture_default_str();
   command.add_option("--shell-material", options.shell_material,
                      "triangle meshes: distance, strain_triangle or fem_triangle");
@@ -40,6 +43,15 @@ void add_scene_options(CLI::App& command, SceneOptions& options) {
   command.add_option("--tethers", options.tethers,
                      "auto (default: every movable particle tethered to its nearest pin along "
                      "the mesh) or none");
+  command.add_option("--self-collision", options.self_collision,
+                     "on or off: the surface's contacts with itself (default: the scene's)");
+  command.add_option("--thickness", options.thickness,
+                     "contact distance in metres (default: the scene's, 0.005)")
+      ->check(finite_number_above(0, true, "metres"));
+  command.add_option("--friction", options.friction,
+                     "friction coefficient against colliders, static and dynamic (default: the "
+                     "scene's, 0.4 and 0.3)")
+      ->check(finite_number_above(0, true, ""));
 }
 
 io::SceneDescription describe_scene(const SceneOptions& options) {
@@ -58,6 +70,9 @@ io::SceneDescription describe_scene(const SceneOptions& options) {
   const auto tethers = options.tethers ? std::optional(choose<io::TetherRule>(
                                              "--tethers", *options.tethers, io::kTetherRuleNames))
                                        : std::nullopt;
+  if (options.self_collision && *options.self_collision != "on" && *options.self_collision != "off")
+    throw InvalidInput("--self-collision: unknown value '" + *options.self_collision +
+                       "' (known: on, off)");
   std::optional<io::PinRule> pins;
   if (options.pins) {
     try {
@@ -72,6 +87,12 @@ io::SceneDescription describe_scene(const SceneOptions& options) {
   if (solid_material) description.solid.material = *solid_material;
   if (pins) description.pins = *pins;
   if (tethers) description.tethers = *tethers;
+  io::CollisionDescription& collisions = description.collisions;
+  if (options.self_collision) collisions.self_collision = *options.self_collision == "on";
+  if (options.thickness) collisions.thickness = Real(*options.thickness);
+  if (options.friction) collisions.static_friction = collisions.dynamic_friction = Real(*options.friction);
+  if (collisions.self_collision && !(collisions.thickness > 0))
+    throw InvalidInput("--thickness: must be positive with self-collision on");
   return description;
 }
 

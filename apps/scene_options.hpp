@@ -22,10 +22,13 @@ struct SceneOptions {
   std::optional<std::string> solid_material;
   std::optional<std::string> pins;
   std::optional<std::string> tethers;
+  std::optional<std::string> self_collision;
+  std::optional<double> thickness;
+  std::optional<double> friction;
 };
 
-/// Adds SCENE and --shell-material, --bending, --solid-material, --pins, --tethers to
-/// `command`.
+/// Adds SCENE and --shell-material, --bending, --solid-material, --pins, --tethers,
+/// --self-collision, --thickness, --friction to `command`.
 void add_scene_options(CLI::App& command, SceneOptions& options);
 
 /// The scene named by the options, the overrides applied. Throws InvalidInput.

@@ -19,4 +19,37 @@ SolverSettings solver_settings(const io::SimulationSettings& simulation) {
   return settings;
 }
 
+CollisionSettings collision_settings(const io::Scene& scene) {
+  const io::CollisionDescription& description = scene.description.collisions;
+  CollisionSettings settings;
+  std::size_t mesh = 0;
+  for (const io::ColliderDescription& collider : description.colliders) {
+    switch (collider.shape) {
+      case io::ColliderShape::plane:
+        settings.colliders.push_back(PlaneCollider{collider.normal.normalized(), collider.offset / collider.normal.norm()});
+        break;
+      case io::ColliderShape::sphere:
+        settings.colliders.push_back(SphereCollider{collider.centre, collider.radius});
+        break;
+      case io::ColliderShape::box:
+        settings.colliders.push_back(BoxCollider{collider.centre, collider.half_extents});
+        break;
+      case io::ColliderShape::capsule:
+        settings.colliders.push_back(CapsuleCollider{collider.a, collider.b, collider.radius});
+        break;
+      case io::ColliderShape::mesh: {
+        const io::Mesh& source = scene.collider_meshes.at(mesh++);
+        settings.colliders.push_back(MeshCollider(source.positions, source.triangles));
+        break;
+      }
+    }
+  }
+  settings.thickness = description.thickness;
+  settings.static_friction = description.static_friction;
+  settings.dynamic_friction = description.dynamic_friction;
+  settings.restitution = description.restitution;
+  settings.self_collision = description.self_collision;
+  return settings;
+}
+
 }  // namespace tessera::cli

@@ -14,4 +14,9 @@ namespace tessera::cli {
 /// every other field keeps SolverSettings' default.
 SolverSettings solver_settings(const io::SimulationSettings& simulation);
 
+/// The scene's contacts as the collision stage's settings: its colliders (a mesh collider
+/// from scene.collider_meshes, in order), thickness, friction, restitution, self-collision.
+/// Throws InvalidInput for a collider the collision module rejects.
+CollisionSettings collision_settings(const io::Scene& scene);
+
 }  // namespace tessera::cli

@@ -181,6 +181,97 @@ void read_solid(const ObjectReader& scene, const Json& json, SolidOptions& solid
   reader.read_real("mass", solid.mass, 0, false);
 }
 
+/// A 3-vector key of an object: three finite numbers.
+bool read_vector(const ObjectReader& reader, const std::string& key, Vector3r& out) {
+  const Json* value = reader.find(key);
+  if (!value) return false;
+  if (!value->is_array() || value->size() != 3 ||
+      !std::all_of(value->begin(), value->end(),
+                   [](const Json& v) { return v.is_number() && fits_real(v.get<double>()); }))
+    reader.fail(reader.key_name(key) + " must be an array of 3 finite numbers, not " +
+                ObjectReader::show(*value));
+  for (Eigen::Index k = 0; k < 3; ++k) out[k] = static_cast<Real>((*value)[std::size_t(k)].get<double>());
+  return true;
+}
+
+ColliderDescription read_collider(const ObjectReader& scene, const Json& json, std::size_t index,
+                                  const std::filesystem::path& base) {
+  const ObjectReader reader(json, scene.file(), "colliders[" + std::to_string(index) + "]");
+  ColliderDescription collider;
+  std::size_t shape = 0;
+  if (!reader.read_choice("shape", kColliderShapeNames, shape))
+    reader.fail(reader.where() + " needs a 'shape' (plane, sphere, box, capsule or mesh)");
+  collider.shape = ColliderShape(shape);
+  const auto need = [&](bool found, const char* key) {
+    if (!found) reader.fail(reader.where() + " (a " + std::string(kColliderShapeNames[shape]) +
+                            ") needs '" + key + "'");
+  };
+  switch (collider.shape) {
+    case ColliderShape::plane: {
+      reader.only({"shape", "normal", "offset"});
+      need(read_vector(reader, "normal", collider.normal), "normal");
+      if (!(collider.normal.norm() > 0))
+        reader.fail(reader.key_name("normal") + " must not be zero");
+      reader.read_real("offset", collider.offset, -std::numeric_limits<double>::infinity(), false);
+      break;
+    }
+    case ColliderShape::sphere:
+      reader.only({"shape", "centre", "radius"});
+      need(read_vector(reader, "centre", collider.centre), "centre");
+      need(reader.find("radius") != nullptr, "radius");
+      reader.read_real("radius", collider.radius, 0, false);
+      break;
+    case ColliderShape::box:
+      reader.only({"shape", "centre", "half_extents"});
+      need(read_vector(reader, "centre", collider.centre), "centre");
+      need(read_vector(reader, "half_extents", collider.half_extents), "half_extents");
+      if (!(collider.half_extents.minCoeff() > 0))
+        reader.fail(reader.key_name("half_extents") + " must be positive");
+      break;
+    case ColliderShape::capsule:
+      reader.only({"shape", "a", "b", "radius"});
+      need(read_vector(reader, "a", collider.a), "a");
+      need(read_vector(reader, "b", collider.b), "b");
+      need(reader.find("radius") != nullptr, "radius");
+      reader.read_real("radius", collider.radius, 0, false);
+      break;
+    case ColliderShape::mesh: {
+      reader.only({"shape", "file"});
+      std::string file;
+      need(reader.read_string("file", file), "file");
+      collider.mesh_file =
+          std::filesystem::path(file).is_absolute() ? std::filesystem::path(file) : base / file;
+      break;
+    }
+  }
+  return collider;
+}
+
+void read_collisions(const ObjectReader& reader, const std::filesystem::path& base,
+                     CollisionDescription& collisions) {
+  if (const Json* colliders = reader.find("colliders")) {
+    if (!colliders->is_array())
+      reader.fail("'colliders' must be an array of colliders, not " + ObjectReader::show(*colliders));
+    collisions.colliders.clear();
+    for (std::size_t i = 0; i < colliders->size(); ++i)
+      collisions.colliders.push_back(read_collider(reader, (*colliders)[i], i, base));
+  }
+  reader.read_real("thickness", collisions.thickness, 0, true);
+  if (reader.find("friction")) {
+    reader.read_real("friction", collisions.static_friction, 0, true);
+    collisions.dynamic_friction = collisions.static_friction;
+  }
+  reader.read_real("dynamic_friction", collisions.dynamic_friction, 0, true);
+  reader.read_real("restitution", collisions.restitution, 0, true, 1, true);
+  if (const Json* self = reader.find("self_collision")) {
+    if (!self->is_boolean())
+      reader.fail("'self_collision' must be true or false, not " + ObjectReader::show(*self));
+    collisions.self_collision = self->get<bool>();
+  }
+  if (collisions.self_collision && !(collisions.thickness > 0))
+    reader.fail("'thickness' must be positive with 'self_collision' on");
+}
+
 PinRule read_pins(const ObjectReader& scene, const Json& value) {
   if (value.is_string()) {
     try {
@@ -212,7 +303,9 @@ SceneDescription describe(const Json& json, const std::string& name,
   reader.only({"name", "generator", "mesh", "pins", "tethers", "tether_compliance",
                "tether_reach_scale", "shell", "solid", "gravity", "time_step", "substeps",
                "iterations", "frames", "velocity_damping", "chebyshev", "chebyshev_rho",
-               "strategy", "mode", "sequential_order", "divergence_rms", "threads"});
+               "strategy", "mode", "sequential_order", "divergence_rms", "threads",
+               "colliders", "thickness", "friction", "dynamic_friction", "restitution",
+               "self_collision"});
   const Json* generator = reader.find("generator");
   const Json* mesh = reader.find("mesh");
   if ((generator != nullptr) == (mesh != nullptr))
@@ -225,8 +318,8 @@ SceneDescription describe(const Json& json, const std::string& name,
     const auto names = [&](const std::string& kind) {
       return spec == kind || spec.rfind(kind + ":", 0) == 0;
     };
-    if (!names("cloth") && !names("bar"))  // never a path: a scene file opens no other file
-      reader.fail("'generator' must be \"cloth\", \"cloth:CxR\", \"bar\" or \"bar:XxYxZ\", not " +
+    if (!names("cloth") && !names("bar") && !names("drape"))  // never a path here
+      reader.fail("'generator' must be \"cloth\", \"cloth:CxR\", \"drape:N\", \"bar\" or \"bar:XxYxZ\", not " +
                   ObjectReader::show(*generator));
     try {
       description = parse_scene_spec(spec);
@@ -249,6 +342,7 @@ SceneDescription describe(const Json& json, const std::string& name,
   reader.read_real("tether_compliance", description.tether_compliance, 0, true);
   reader.read_real("tether_reach_scale", description.tether_reach_scale, 1, true);
   if (const Json* shell = reader.find("shell")) read_shell(reader, *shell, description.shell);
+  read_collisions(reader, base, description.collisions);
   if (const Json* solid = reader.find("solid")) read_solid(reader, *solid, description.solid);
 
   SimulationSettings& simulation = description.simulation;
@@ -317,6 +411,31 @@ std::string describe_pin_rule(const PinRule& rule) {
   return {};
 }
 
+namespace {
+
+void make_drape(SceneDescription& description, std::size_t vertices) {
+  description.source = SceneSource::cloth;
+  description.cloth_columns = description.cloth_rows = vertices;
+  description.pins.kind = PinRule::Kind::none;
+  // The cloth spans [0, 1]² at y = 0; the sphere's top is 0.1 m below its centre.
+  CollisionDescription& collisions = description.collisions;
+  ColliderDescription sphere;
+  sphere.shape = ColliderShape::sphere;
+  sphere.centre = Vector3r(Real(0.5), Real(-0.35), Real(0.5));
+  sphere.radius = Real(0.25);
+  ColliderDescription ground;
+  ground.shape = ColliderShape::plane;
+  ground.normal = Vector3r(0, 1, 0);
+  ground.offset = Real(-0.6);
+  collisions.colliders = {sphere, ground};
+  collisions.self_collision = true;
+  // Below half the grid spacing, so the flat cloth's own neighbours are never in contact.
+  collisions.thickness = std::min(Real(0.005), Real(0.4) / Real(vertices - 1));
+  description.simulation.frames = 120;
+}
+
+}  // namespace
+
 SceneDescription parse_scene_spec(std::string_view spec) {
   const auto fail = [&](const std::string& problem) -> SceneDescription {
     throw InvalidInput("scene '" + std::string(spec) + "': " + problem);
@@ -351,6 +470,16 @@ SceneDescription parse_scene_spec(std::string_view spec) {
       description.cloth_columns = both[0];
       description.cloth_rows = both[1];
     }
+    return description;
+  }
+  if (generator("drape")) {
+    // A square cloth falling flat onto a sphere and the ground, against itself too.
+    std::size_t n[1] = {kDrapeVertices};
+    if (spec.size() > 5 && !parse_sizes(spec.substr(6), n, 1))
+      return fail("expected drape or drape:N with a vertex count per side, e.g. drape:128");
+    if (n[0] < 2) return fail("a cloth needs at least 2 vertices per side");
+    if (product_up_to({n[0], n[0]}, std::size_t(1) << 31) == 0) return fail("more than 2^31 vertices");
+    make_drape(description, n[0]);
     return description;
   }
   if (generator("bar")) {

@@ -573,6 +573,13 @@ Scene build_scene(const SceneDescription& description) {
         {.reach_scale = description.tether_reach_scale,
          .compliance = description.tether_compliance});
   }
+  for (const ColliderDescription& collider : description.collisions.colliders) {
+    if (collider.shape != ColliderShape::mesh) continue;
+    Mesh collider_mesh = read_mesh(collider.mesh_file);
+    if (collider_mesh.triangles.empty())
+      throw InvalidInput(collider.mesh_file.string() + ": a mesh collider needs triangles, the file has none");
+    scene.collider_meshes.push_back(std::move(collider_mesh));
+  }
   return scene;
 }
 

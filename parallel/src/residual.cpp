@@ -16,7 +16,8 @@ namespace tessera {
 namespace detail {
 
 std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
-                                           const ConstraintSets& dynamic, std::size_t chunk) {
+                                           const ConstraintSets& dynamic,
+                                           const ConstraintSets& contacts, std::size_t chunk) {
   std::vector<ResidualRange> ranges;
   const auto add = [&](ConstraintFamily family, ResidualRange::Set set, std::size_t begin,
                        std::size_t end) {
@@ -25,11 +26,13 @@ std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
   };
   const auto jacobi_sizes = schedule.jacobi().constraints.sizes();
   const auto dynamic_sizes = dynamic.sizes();
+  const auto contact_sizes = contacts.sizes();
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
     for (const ScheduleBlock& r : schedule.coloured_ranges(ConstraintFamily(f)))
       add(r.family, ResidualRange::coloured, r.begin, r.end);
     add(ConstraintFamily(f), ResidualRange::jacobi, 0, jacobi_sizes[f]);
     add(ConstraintFamily(f), ResidualRange::dynamic, 0, dynamic_sizes[f]);
+    add(ConstraintFamily(f), ResidualRange::contacts, 0, contact_sizes[f]);
   }
   return ranges;
 }

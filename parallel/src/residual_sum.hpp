@@ -17,7 +17,7 @@ namespace tessera::detail {
 /// Constraints [begin, end) of one family of the coloured batches, the Jacobi set or the
 /// dynamic constraints.
 struct ResidualRange {
-  enum Set : std::uint8_t { coloured, jacobi, dynamic };
+  enum Set : std::uint8_t { coloured, jacobi, dynamic, contacts };
   ConstraintFamily family;
   Set set;
   std::uint32_t begin;
@@ -44,7 +44,8 @@ inline constexpr std::size_t kLongestResidualRange = 2048;
 /// Every real constraint of the schedule and of `dynamic`, in ranges of at most `chunk`
 /// (≤ kLongestResidualRange) constraints.
 std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
-                                           const ConstraintSets& dynamic, std::size_t chunk);
+                                           const ConstraintSets& dynamic,
+                                           const ConstraintSets& contacts, std::size_t chunk);
 
 /// The partial sums of one range, at `particles`: of the XPBD residual C + α̃λ of the XPBD
 /// families with α̃ = compliance / compliance_dt² when compliance_dt > 0 (compliance

@@ -202,20 +202,23 @@ void Solver::JacobiWork::bind(const JacobiSet& jacobi) {
 void Solver::build_stages() {
   stages_.assign(schedule_.iteration_stages().begin(), schedule_.iteration_stages().end());
   velocity_stages_.assign(schedule_.velocity_stages().begin(), schedule_.velocity_stages().end());
-  if (dynamic_.constraint_count == 0) return;
-  const Stage all{StageKind::sequential_sweep, StageSet::dynamic, 0,
-                  std::uint32_t(dynamic_.blocks.size())};
-  const bool velocity_pass =
-      std::any_of(dynamic_.blocks.begin(), dynamic_.blocks.end(), [](const ScheduleBlock& b) {
-        return family_traits(b.family).velocity_pass;
-      });
-  if (velocity_pass) velocity_stages_.push_back({StageKind::velocity_pass, all.set, 0, all.last_block});
-  if (settings_.mode == SolverMode::sequential) {
-    stages_.push_back(all);
-    return;
+  // The dynamic constraints, then the contacts: each a set swept after the schedule's.
+  for (const StageSet set : {StageSet::dynamic, StageSet::contacts}) {
+    const JacobiSet& extra = set == StageSet::dynamic ? dynamic_ : contacts_;
+    if (extra.constraint_count == 0) continue;
+    const Stage all{StageKind::sequential_sweep, set, 0, std::uint32_t(extra.blocks.size())};
+    const bool velocity_pass =
+        std::any_of(extra.blocks.begin(), extra.blocks.end(), [](const ScheduleBlock& b) {
+          return family_traits(b.family).velocity_pass;
+        });
+    if (velocity_pass) velocity_stages_.push_back({StageKind::velocity_pass, set, 0, all.last_block});
+    if (settings_.mode == SolverMode::sequential) {
+      stages_.push_back(all);
+      continue;
+    }
+    stages_.push_back({StageKind::jacobi_projection, set, 0, all.last_block});
+    stages_.push_back({StageKind::jacobi_reduction, set, 0, all.last_block});
   }
-  stages_.push_back({StageKind::jacobi_projection, all.set, 0, all.last_block});
-  stages_.push_back({StageKind::jacobi_reduction, all.set, 0, all.last_block});
 }
 
 ConstraintSets& Solver::batches_of(StageSet set) {
@@ -223,6 +226,7 @@ ConstraintSets& Solver::batches_of(StageSet set) {
     case StageSet::coloured: return schedule_.coloured();
     case StageSet::jacobi: return schedule_.jacobi().constraints;
     case StageSet::dynamic: break;
+    case StageSet::contacts: return contacts_.constraints;
   }
   return dynamic_.constraints;
 }
@@ -230,6 +234,7 @@ ConstraintSets& Solver::batches_of(StageSet set) {
 std::span<const ScheduleBlock> Solver::blocks_of(const Stage& stage) const {
   const std::vector<ScheduleBlock>* blocks = &dynamic_.blocks;
   if (stage.set == StageSet::jacobi) blocks = &schedule_.jacobi().blocks;
+  if (stage.set == StageSet::contacts) blocks = &contacts_.blocks;
   const ScheduleBlock* base =
       stage.set == StageSet::coloured ? schedule_.blocks().data() : blocks->data();
   return {base + stage.first_block, base + stage.last_block};
@@ -238,8 +243,12 @@ std::span<const ScheduleBlock> Solver::blocks_of(const Stage& stage) const {
 void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection) {
   ConstraintSets& sets = batches_of(stage.set);
   const auto blocks = blocks_of(stage);
-  JacobiSet& jacobi = stage.set == StageSet::jacobi ? schedule_.jacobi() : dynamic_;
-  JacobiWork& work = stage.set == StageSet::jacobi ? jacobi_work_ : dynamic_work_;
+  JacobiSet& jacobi = stage.set == StageSet::jacobi     ? schedule_.jacobi()
+                     : stage.set == StageSet::contacts ? contacts_
+                                                       : dynamic_;
+  JacobiWork& work = stage.set == StageSet::jacobi     ? jacobi_work_
+                     : stage.set == StageSet::contacts ? contacts_work_
+                                                       : dynamic_work_;
   switch (stage.kind) {
     case StageKind::coloured_phase: {
       const ParticleArrays particles = ParticleArrays::of(state_);
@@ -464,6 +473,7 @@ void Solver::reset_lambdas() {
   schedule_.coloured().for_each(reset);
   schedule_.jacobi().constraints.for_each(reset);
   dynamic_.constraints.for_each(reset);
+  contacts_.constraints.for_each(reset);
 }
 
 void Solver::integrate(Real h) {
@@ -510,6 +520,7 @@ void Solver::step() {
   for (std::size_t substep = 0; substep < settings_.substeps; ++substep) {
     const bool last = substep + 1 == settings_.substeps;
     integrate(h);
+    if (collisions_) detect_contacts(h);
     reset_lambdas();
     if (last && settings_.report_residuals) report_.residual_before = residual();
     if (last && settings_.record_convergence) report_.history.push_back(report_.residual_before);
@@ -523,8 +534,9 @@ void Solver::step() {
     }
     if (!(last && settings_.record_convergence))
       statistics_.seconds_projection += seconds_since(projection_start);
-    statistics_.projections +=
-        std::uint64_t(settings_.iterations) * (statistics_.constraints + dynamic_count_);
+    statistics_.projections += std::uint64_t(settings_.iterations) *
+                               (statistics_.constraints + dynamic_count_ +
+                                contacts_.constraint_count);
     update_velocities(h);
     for (const Stage& stage : velocity_stages_) run_stage(stage, projection);
     if (last && settings_.report_residuals) report_.residual_after = residual();
@@ -537,7 +549,8 @@ void Solver::step() {
 }
 
 Residual Solver::residual() {
-  const auto ranges = detail::residual_ranges(schedule_, dynamic_.constraints, kResidualChunk);
+  const auto ranges = detail::residual_ranges(schedule_, dynamic_.constraints,
+                                              contacts_.constraints, kResidualChunk);
   std::vector<detail::ResidualPartial> partials(ranges.size());
   const ParticleArrays particles = ParticleArrays::of(state_);
   // XPBD: the residual of the equations the last projections solved, C + α̃λ at their dt.
@@ -550,6 +563,8 @@ Residual Solver::residual() {
                                        ? schedule_.coloured()
                                    : range.set == detail::ResidualRange::jacobi
                                        ? schedule_.jacobi().constraints
+                                   : range.set == detail::ResidualRange::contacts
+                                       ? contacts_.constraints
                                        : dynamic_.constraints;
       partials[k] = detail::residual_of_range(range, sets, particles, compliance_dt);
     }
@@ -560,8 +575,11 @@ Residual Solver::residual() {
     FamilyResidual& family = result.families[f];
     if (family.constraints == 0) continue;
     family.worst_is_dynamic = worst[f].set == detail::ResidualRange::dynamic;
-    family.worst = family.worst_is_dynamic
-                       ? dynamic_user_index(ConstraintFamily(f), worst[f].slot)
+    family.worst_is_contact = worst[f].set == detail::ResidualRange::contacts;
+    const auto& contact_source = contact_source_[f];
+    family.worst = family.worst_is_dynamic ? dynamic_user_index(ConstraintFamily(f), worst[f].slot)
+                   : family.worst_is_contact
+                       ? (contact_source.empty() ? worst[f].slot : contact_source[worst[f].slot])
                        : schedule_.user_constraint(ConstraintFamily(f),
                                                    worst[f].set == detail::ResidualRange::jacobi,
                                                    worst[f].slot);
@@ -650,29 +668,70 @@ void Solver::set_dynamic_constraints(ConstraintSets constraints) {
                          " particles, the model has " + std::to_string(state_.size()));
   });
   dynamic_count_ = constraints.size();
+  dynamic_ = extra_set(std::move(constraints), dynamic_source_, false);
+  dynamic_work_.bind(dynamic_);
+  build_stages();
+}
+
+JacobiSet Solver::extra_set(ConstraintSets constraints,
+                            std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>& source,
+                            bool scheduled_numbering) {
+  const auto sizes = constraints.sizes();
   if (settings_.mode == SolverMode::sequential) {
     // Swept as given, family by family (the user's numbering is the solver's).
-    dynamic_ = JacobiSet();
-    dynamic_source_ = {};
-    const auto sizes = constraints.sizes();
+    JacobiSet set;
+    source = {};
     for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
-      if (sizes[f] != 0) dynamic_.blocks.push_back({ConstraintFamily(f), 0, std::uint32_t(sizes[f])});
-    dynamic_.constraints = std::move(constraints);
-    dynamic_.constraint_count = dynamic_count_;
-  } else {
-    auto& all = dynamic_source_;
-    const auto sizes = constraints.sizes();
-    for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
-      all[f].resize(sizes[f]);
-      for (std::size_t i = 0; i < sizes[f]; ++i) all[f][i] = std::uint32_t(i);
-    }
-    dynamic_ = detail::build_jacobi_set(
-        constraints, all, state_.size(),
-        [&](ParticleIndex p) { return schedule_.scheduled_particle(p); },
-        [&](ParticleIndex scheduled) { return state_.inverse_mass[scheduled] > 0; },
-        schedule_.options());
+      if (sizes[f] != 0) set.blocks.push_back({ConstraintFamily(f), 0, std::uint32_t(sizes[f])});
+    set.constraint_count = constraints.size();
+    set.constraints = std::move(constraints);
+    return set;
   }
-  dynamic_work_.bind(dynamic_);
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+    source[f].resize(sizes[f]);
+    for (std::size_t i = 0; i < sizes[f]; ++i) source[f][i] = std::uint32_t(i);
+  }
+  return detail::build_jacobi_set(
+      constraints, source, state_.size(),
+      [&](ParticleIndex p) { return scheduled_numbering ? p : schedule_.scheduled_particle(p); },
+      [&](ParticleIndex scheduled) { return state_.inverse_mass[scheduled] > 0; },
+      schedule_.options());
+}
+
+void Solver::set_collisions(CollisionSettings settings,
+                            std::span<const std::uint32_t> surface_triangles) {
+  if (surface_triangles.size() % 3 != 0)
+    throw InvalidInput("collisions: the surface has " + std::to_string(surface_triangles.size()) +
+                       " triangle indices, not a multiple of 3");
+  std::vector<std::uint32_t> scheduled(surface_triangles.size());
+  for (std::size_t i = 0; i < surface_triangles.size(); ++i) {
+    if (surface_triangles[i] >= state_.size())
+      throw InvalidInput("collisions: surface triangle " + std::to_string(i / 3) +
+                         " names particle " + std::to_string(surface_triangles[i]) +
+                         ", the model has " + std::to_string(state_.size()));
+    scheduled[i] = schedule_.scheduled_particle(surface_triangles[i]);
+  }
+  collisions_ =
+      std::make_unique<CollisionStage>(std::move(settings), std::move(scheduled), state_.size());
+}
+
+void Solver::clear_collisions() {
+  collisions_.reset();
+  contacts_ = JacobiSet();
+  contact_source_ = {};
+  contacts_work_.bind(contacts_);
+  build_stages();
+}
+
+void Solver::detect_contacts(Real h) {
+  arena_->execute([&] {
+    collisions_->detect(state_, h, Real(settings_.gravity.norm()), contact_batches_);
+  });
+  // The contacts come in the schedule's numbering, sorted by particle: the set's order is
+  // theirs, whatever the thread count.
+  contacts_ = extra_set(std::move(contact_batches_), contact_source_, true);
+  contact_batches_ = ConstraintSets();
+  contacts_work_.bind(contacts_);
   build_stages();
 }
 

@@ -121,6 +121,81 @@ TEST(SceneFile, EveryKey) {
   EXPECT_FLOAT_EQ(scene.simulation.divergence_rms, 3);
 }
 
+TEST(SceneSpec, DrapeIsAFreeClothOverASphereAndTheGroundAgainstItself) {
+  const SceneDescription drape = parse_scene_spec("drape");
+  EXPECT_EQ(drape.source, SceneSource::cloth);
+  EXPECT_EQ(drape.cloth_columns, kDrapeVertices);
+  EXPECT_EQ(drape.cloth_rows, kDrapeVertices);
+  EXPECT_EQ(drape.pins.kind, PinRule::Kind::none);
+  EXPECT_EQ(drape.simulation.frames, 120u);
+  ASSERT_EQ(drape.collisions.colliders.size(), 2u);
+  EXPECT_EQ(drape.collisions.colliders[0].shape, ColliderShape::sphere);
+  EXPECT_EQ(drape.collisions.colliders[1].shape, ColliderShape::plane);
+  EXPECT_TRUE(drape.collisions.self_collision);
+  EXPECT_TRUE(drape.collisions.enabled());
+  // Thinner than half the grid spacing, so the flat cloth touches nothing of its own.
+  EXPECT_LT(drape.collisions.thickness, Real(0.5) / Real(kDrapeVertices - 1));
+  const SceneDescription small = parse_scene_spec("drape:16");
+  EXPECT_EQ(small.cloth_columns, 16u);
+  EXPECT_LT(small.collisions.thickness, Real(0.5) / Real(15));
+  EXPECT_EQ(spec_error("drape:x"), "scene 'drape:x': expected drape or drape:N with a vertex count "
+                                   "per side, e.g. drape:128");
+  EXPECT_EQ(spec_error("drape:1"), "scene 'drape:1': a cloth needs at least 2 vertices per side");
+  EXPECT_FALSE(parse_scene_spec("cloth").collisions.enabled());
+}
+
+TEST(SceneFile, CollidersAndContactKeys) {
+  const SceneDescription scene = from_json(R"({"generator": "cloth:8",
+    "colliders": [{"shape": "plane", "normal": [0, 2, 0], "offset": -1},
+                  {"shape": "sphere", "centre": [1, 2, 3], "radius": 0.5},
+                  {"shape": "box", "centre": [0, -1, 0], "half_extents": [1, 0.1, 2]},
+                  {"shape": "capsule", "a": [0, 0, 0], "b": [1, 0, 0], "radius": 0.2},
+                  {"shape": "mesh", "file": "bowl.obj"}],
+    "thickness": 0.01, "friction": 0.5, "restitution": 0.25, "self_collision": true})");
+  const CollisionDescription& c = scene.collisions;
+  ASSERT_EQ(c.colliders.size(), 5u);
+  EXPECT_EQ(c.colliders[0].normal, Vector3r(0, 2, 0));
+  EXPECT_EQ(c.colliders[0].offset, Real(-1));
+  EXPECT_EQ(c.colliders[1].centre, Vector3r(1, 2, 3));
+  EXPECT_EQ(c.colliders[1].radius, Real(0.5));
+  EXPECT_EQ(c.colliders[2].half_extents, Vector3r(1, Real(0.1), 2));
+  EXPECT_EQ(c.colliders[3].b, Vector3r(1, 0, 0));
+  EXPECT_EQ(c.colliders[4].mesh_file, std::filesystem::path("/scenes/bowl.obj"));
+  EXPECT_EQ(c.thickness, Real(0.01));
+  // "friction" sets both coefficients; "dynamic_friction" then overrides its own.
+  EXPECT_EQ(c.static_friction, Real(0.5));
+  EXPECT_EQ(c.dynamic_friction, Real(0.5));
+  EXPECT_EQ(from_json(R"({"generator": "cloth", "friction": 0.5, "dynamic_friction": 0.2})")
+                .collisions.dynamic_friction,
+            Real(0.2));
+  EXPECT_EQ(c.restitution, Real(0.25));
+  EXPECT_TRUE(c.self_collision);
+
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "thickness": -1})"),
+            "scene.json: 'thickness' must be a number in [0, inf), not -1");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "friction": -0.1})"),
+            "scene.json: 'friction' must be a number in [0, inf), not -0.1");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "restitution": 2})"),
+            "scene.json: 'restitution' must be a number in [0, 1], not 2");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "self_collision": true, "thickness": 0})"),
+            "scene.json: 'thickness' must be positive with 'self_collision' on");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "colliders": [{"shape": "cone"}]})"),
+            "scene.json: 'colliders[0].shape' must be one of plane, sphere, box, capsule, mesh, "
+            "not \"cone\"");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "colliders": [{"shape": "sphere", "radius": 1}]})"),
+            "scene.json: 'colliders[0]' (a sphere) needs 'centre'");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "colliders": [{"shape": "sphere", "centre": [0, 0, 0], "radius": 0}]})"),
+            "scene.json: 'colliders[0].radius' must be a number in (0, inf), not 0");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "colliders": [{"shape": "plane", "normal": [0, 0, 0]}]})"),
+            "scene.json: 'colliders[0].normal' must not be zero");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "colliders": [{"shape": "box", "centre": [0, 0, 0], "half_extents": [1, -1, 1]}]})"),
+            "scene.json: 'colliders[0].half_extents' must be positive");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "colliders": [{"shape": "plane", "normal": [0, 1, 0], "radius": 1}]})"),
+            "scene.json: unknown key 'colliders[0].radius'");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "colliders": {"shape": "plane"}})"),
+            "scene.json: 'colliders' must be an array of colliders, not {\"shape\":\"plane\"}");
+}
+
 TEST(SceneFile, GeneratorAndPinRule) {
   const SceneDescription scene = from_json(R"({"generator": "bar:1x2x3", "pins": "highest-z"})");
   EXPECT_EQ(scene.source, SceneSource::bar);
@@ -165,9 +240,9 @@ TEST(SceneFile, ErrorsNameTheKeyOrTheLine) {
             "scene.json: 'pins': unknown pin rule 'left' (known: default, none, lowest-x, "
             "lowest-y, lowest-z, highest-x, highest-y, highest-z)");
   EXPECT_EQ(json_error(R"({"generator": "sphere"})"),
-            "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"bar\" or \"bar:XxYxZ\", not \"sphere\"");
+            "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"drape:N\", \"bar\" or \"bar:XxYxZ\", not \"sphere\"");
   EXPECT_EQ(json_error(R"({"generator": "clothes.json"})"),
-            "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"bar\" or \"bar:XxYxZ\", not \"clothes.json\"");
+            "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"drape:N\", \"bar\" or \"bar:XxYxZ\", not \"clothes.json\"");
   EXPECT_EQ(json_error(R"({"generator": "cloth:1"})"),
             "scene.json: 'generator': scene 'cloth:1': a cloth needs at least 2 vertices per side");
   EXPECT_EQ(json_error(R"({"frames": 3})"),

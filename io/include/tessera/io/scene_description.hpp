@@ -58,6 +58,42 @@ enum class TetherRule { automatic, none };
 /// The names of TetherRule's values, in order (scene files, the tool's --tethers).
 inline constexpr std::array<std::string_view, 2> kTetherRuleNames = {"auto", "none"};
 
+/// A static collider of a scene: io's own plain description (io depends on core only); the
+/// tool turns it into the collision module's collider (apps/solver_settings.hpp).
+enum class ColliderShape { plane, sphere, box, capsule, mesh };
+/// The names of ColliderShape's values, in order (scene files' "shape").
+inline constexpr std::array<std::string_view, 5> kColliderShapeNames = {"plane", "sphere", "box",
+                                                                        "capsule", "mesh"};
+struct ColliderDescription {
+  ColliderShape shape = ColliderShape::plane;
+  /// plane: the surface n·x = offset, free on the side n points to (n need not be unit).
+  Vector3r normal = Vector3r(0, 1, 0);
+  Real offset = 0;
+  /// sphere: centre and radius; box: centre and half extents (axis-aligned); capsule: the
+  /// segment a–b and the radius.
+  Vector3r centre = Vector3r::Zero();
+  Real radius = 0;
+  Vector3r half_extents = Vector3r::Zero();
+  Vector3r a = Vector3r::Zero(), b = Vector3r::Zero();
+  /// mesh: a triangle mesh file (OBJ, or any format read_mesh knows with triangles), read by
+  /// build_scene into Scene::collider_meshes.
+  std::filesystem::path mesh_file;
+};
+
+/// Contacts of a scene (the collision module's CollisionSettings, see
+/// collision/include/tessera/collision/collision_stage.hpp for what each means): on when
+/// there is a collider or self-collision.
+struct CollisionDescription {
+  std::vector<ColliderDescription> colliders;
+  Real thickness = Real(0.005);
+  Real static_friction = Real(0.4);
+  Real dynamic_friction = Real(0.3);
+  Real restitution = 0;
+  bool self_collision = false;
+
+  bool enabled() const { return self_collision || !colliders.empty(); }
+};
+
 /// How long and how finely a scene is simulated, and with which strategy, mode and threads.
 /// The tool's options override these field by field.
 struct SimulationSettings {
@@ -105,6 +141,7 @@ struct SceneDescription {
   Real tether_reach_scale = kDefaultTetherReachScale;
   ShellOptions shell;
   SolidOptions solid;
+  CollisionDescription collisions;
   SimulationSettings simulation;
 };
 
@@ -117,6 +154,8 @@ struct Scene {
   Mesh mesh;
   std::vector<VertexIndex> surface_triangles;
   std::vector<VertexIndex> pinned;
+  /// The mesh of each mesh collider of description.collisions, in order.
+  std::vector<Mesh> collider_meshes;
 };
 
 /// Generates or reads the geometry, applies the pins and materials. Throws InvalidInput

@@ -29,7 +29,16 @@
 //     "chebyshev": true, "chebyshev_rho": 0.9,  // mode jacobi's acceleration (solver.hpp)
 //     "strategy": "stencil", "mode": "gs", "threads": 0,  // 0: every hardware thread
 //     "sequential_order": "groups",          // mode sequential: or "input"
-//     "divergence_rms": 10                   // a step above this RMS residual is a failure
+//     "divergence_rms": 10,                  // a step above this RMS residual is a failure
+//     "colliders": [                         // static colliders (ColliderDescription)
+//       { "shape": "plane", "normal": [0, 1, 0], "offset": -0.6 },
+//       { "shape": "sphere", "centre": [0.5, -0.35, 0.5], "radius": 0.25 },
+//       { "shape": "box", "centre": [0, 0, 0], "half_extents": [1, 0.1, 1] },
+//       { "shape": "capsule", "a": [0, 0, 0], "b": [1, 0, 0], "radius": 0.1 },
+//       { "shape": "mesh", "file": "bowl.obj" } ],  // relative to the scene file
+//     "thickness": 0.005,                    // contact distance (m)
+//     "friction": 0.4, "dynamic_friction": 0.3,  // "friction" sets both, then the other wins
+//     "restitution": 0, "self_collision": false
 //   }
 //
 // What the pin rules pick is said with PinRule (scene_description.hpp).
@@ -54,9 +63,14 @@ PinRule parse_pin_rule(std::string_view text);
 /// The inverse of parse_pin_rule for the named kinds; "list of N vertices" for a list.
 std::string describe_pin_rule(const PinRule& rule);
 
+/// Vertices per side of the "drape" scene.
+inline constexpr std::size_t kDrapeVertices = 128;
+
 /// A scene on the command line: "cloth" (64 × 64 vertices), "cloth:N" (N × N),
 /// "cloth:CxR" (either followed by ":alternating" for chequerboard diagonals,
-/// DiagonalPattern::alternating), "bar" (4 × 4 × 20 cells), "bar:XxYxZ", a path ending in .json (read as a
+/// DiagonalPattern::alternating), "drape" / "drape:N" (a free N × N cloth, 128 by default,
+/// falling onto a sphere and the ground with self-collision, 120 frames), "bar" (4 × 4 × 20
+/// cells), "bar:XxYxZ", a path ending in .json (read as a
 /// scene file) or any other path (a mesh file, see read_mesh; not opened here). Sizes must be
 /// at least 2 vertices (cloth) or 1 cell (bar) per side, and at most 2^31 vertices in all.
 /// Throws InvalidInput naming the spec.

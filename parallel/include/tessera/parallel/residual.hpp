@@ -29,9 +29,11 @@ struct FamilyResidual {
   double max = 0;
   /// The constraint whose residual is max (the first of equal ones in schedule order): its
   /// global id (see Model), or, when worst_is_dynamic, its index among the family's dynamic
-  /// constraints (Solver::set_dynamic_constraints).
+  /// constraints (Solver::set_dynamic_constraints), or, when worst_is_contact, its index
+  /// among the family's contacts of the last substep (Solver::set_collisions).
   std::size_t worst = 0;
   bool worst_is_dynamic = false;
+  bool worst_is_contact = false;
 };
 
 struct Residual {

@@ -32,6 +32,7 @@
 
 #include <oneapi/tbb/task_arena.h>
 
+#include <tessera/collision/collision_stage.hpp>
 #include <tessera/coloring/colouring.hpp>
 #include <tessera/core/constraint_batch.hpp>
 #include <tessera/core/particle_state.hpp>
@@ -223,6 +224,22 @@ class Solver {
   void set_dynamic_constraints(ConstraintSets constraints);
   std::size_t dynamic_constraint_count() const { return dynamic_count_; }
 
+  /// Collision detection every substep (collision_stage.hpp): after each prediction the
+  /// stage finds the contacts of the predicted positions (colliders, and with
+  /// settings.self_collision the surface against itself), which the solver then projects
+  /// after the model's and the dynamic constraints in every iteration, as a Jacobi set of
+  /// their own (mode sequential: one after another), with their velocity pass after the
+  /// velocity update. `surface_triangles` (3 particles each, the user's numbering) is the
+  /// surface self-collision works on. Replaces an earlier stage; throws InvalidInput for bad
+  /// settings or a triangle naming a particle the model does not have.
+  void set_collisions(CollisionSettings settings, std::span<const std::uint32_t> surface_triangles);
+  /// Turns collision detection off and drops the last contacts.
+  void clear_collisions();
+  /// The stage (its settings and statistics), or null.
+  const CollisionStage* collisions() const { return collisions_.get(); }
+  /// The contacts of the last substep, in the schedule's numbering.
+  const ConstraintSets& contacts() const { return contacts_.constraints; }
+
   /// The particles in the schedule's numbering, for code that works on the arrays.
   const ParticleState& scheduled_state() const { return state_; }
 
@@ -237,6 +254,14 @@ class Solver {
   bool guards_divergence() const;
   void restore_saved_state();
   void integrate(Real h);
+  /// The collision stage's contacts for the substep of length h just predicted.
+  void detect_contacts(Real h);
+  /// A set swept after the schedule's (dynamic constraints, contacts): a Jacobi set built
+  /// from `constraints`, whose particles renumber() maps to the schedule's numbering (mode
+  /// sequential: the blocks only, in input order). source gets the caller's index per slot.
+  JacobiSet extra_set(ConstraintSets constraints,
+                      std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>& source,
+                      bool scheduled_numbering);
   void update_velocities(Real h);
   /// The corrected positions of a Jacobi set's incidences.
   struct JacobiWork {
@@ -279,6 +304,12 @@ class Solver {
   std::size_t chebyshev_iteration_ = 0;
   Real chebyshev_weight_ = 1;
   std::size_t dynamic_count_ = 0;
+  /// The collision stage, its contacts of the current substep and their work.
+  std::unique_ptr<CollisionStage> collisions_;
+  JacobiSet contacts_;
+  JacobiWork contacts_work_;
+  ConstraintSets contact_batches_;
+  std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> contact_source_;
   /// The time step of the last projections (step: the substep; project: its dt), which the
   /// XPBD residual C + α̃λ is measured at.
   Real projection_dt_ = 0;

@@ -6,6 +6,7 @@
 //   jacobi      Jacobi projection │ Jacobi reduction │ (dynamic ...)
 //   hybrid      coloured phases of the large colours │ Jacobi projection │ reduction │ (dynamic ...)
 //   sequential  sequential sweep (every family range in input order) │ (dynamic: sequential sweep)
+//   then, with a collision stage, the substep's contacts like the dynamic constraints
 //   after the velocity update: a velocity pass per phase (or set) holding a family with a
 //   velocity solve (kTraits.velocity_pass), none otherwise
 //
@@ -40,6 +41,8 @@ enum class StageSet : std::uint8_t {
   jacobi,
   /// The solver's dynamic constraints (Solver::set_dynamic_constraints).
   dynamic,
+  /// The contacts the collision stage made for this substep (Solver::set_collisions).
+  contacts,
 };
 
 struct Stage {

@@ -1,0 +1,116 @@
+// The collision stage: contacts found from the positions every substep, handed to the solver
+// as constraint batches it projects like any family (a Jacobi set of their own).
+//
+//   per substep, after the prediction (x = predicted, previous = start of the substep):
+//
+//     state ──► colliders (plane, sphere, box, capsule, mesh)  ──► collider_contact
+//          │     one closest-point query per movable particle        (unilateral, friction,
+//          │                                                          restitution)
+//          └──► self-collision (cloth surface)                  ──► triangle_point_distance
+//                spatial hash of the swept primitives,                edge_edge_distance
+//                vertex–triangle and edge–edge within reach           (compression only)
+//
+// Why per substep: a contact is a linearisation (a tangent plane, a closest pair) that is
+// valid only near the positions it was made at; remade every substep (h = 1/60/32 s by
+// default) it never drifts far, where one made per frame lets a fast particle pass a thin
+// collider or a cloth layer before the next detection. What it costs is measured in the
+// collision benchmarks.
+//
+// Numbering: the stage works in the numbering of the state it is given (the solver hands it
+// the scheduled state and the surface renumbered once), so no contact is renumbered per
+// substep. Lists come out sorted by particle, so every thread count gives the same contacts.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <tessera/collision/colliders.hpp>
+#include <tessera/core/constraint_families.hpp>
+#include <tessera/core/particle_state.hpp>
+#include <tessera/core/real.hpp>
+
+namespace tessera {
+
+/// Defaults of the stage: 5 mm of contact distance, friction of cloth on a dry surface.
+inline constexpr Real kDefaultThickness = Real(0.005);
+inline constexpr Real kDefaultStaticFriction = Real(0.4);
+inline constexpr Real kDefaultDynamicFriction = Real(0.3);
+
+struct CollisionSettings {
+  /// Static colliders.
+  std::vector<Collider> colliders;
+  /// Contact distance: a particle keeps this far outside a collider and from the cloth's
+  /// triangles and edges; > 0 where self-collision is on, ≥ 0 otherwise, finite.
+  Real thickness = kDefaultThickness;
+  /// Coulomb friction against colliders (Macklin et al. 2014, position-based): the tangential
+  /// motion of a substep is removed when below static_friction × penetration, else shortened
+  /// by dynamic_friction × penetration. ≥ 0, finite.
+  Real static_friction = kDefaultStaticFriction;
+  Real dynamic_friction = kDefaultDynamicFriction;
+  /// Coefficient of restitution e ∈ [0, 1] against colliders; approaches slower than
+  /// 2 |g| h bounce with e = 0 (so resting contacts do not jitter).
+  Real restitution = 0;
+  /// Cloth against itself: vertex–triangle and edge–edge contacts of the surface.
+  bool self_collision = false;
+  /// Stiffness of the self-contacts (PBD, compression only), in [0, 1].
+  Real self_stiffness = 1;
+};
+
+/// Throws InvalidInput naming the setting: negative or non-finite thickness, friction or
+/// restitution outside its range, self-collision with thickness 0, a stiffness outside [0, 1].
+void check_collision_settings(const CollisionSettings& settings);
+
+/// What detection found, per substep and summed.
+struct CollisionStatistics {
+  /// Contacts of the last substep, by kind.
+  std::size_t collider_contacts = 0;
+  std::size_t vertex_triangle_contacts = 0;
+  std::size_t edge_edge_contacts = 0;
+  /// Over every substep detected so far: the number of substeps, the sum and the largest
+  /// number of contacts of one substep, and the wall time of detection (broad + narrow phase
+  /// and building the batches).
+  std::uint64_t substeps = 0;
+  std::uint64_t contacts_sum = 0;
+  std::size_t contacts_max = 0;
+  double seconds_detection = 0;
+
+  std::size_t contacts() const {
+    return collider_contacts + vertex_triangle_contacts + edge_edge_contacts;
+  }
+  double contacts_mean() const { return substeps == 0 ? 0 : double(contacts_sum) / double(substeps); }
+};
+
+class CollisionStage {
+ public:
+  /// `triangles` (3 indices each, in the numbering of the states detect() will be given) is
+  /// the surface self-collision works on; empty without self-collision. Throws InvalidInput
+  /// for bad settings or a triangle index ≥ particle_count.
+  CollisionStage(CollisionSettings settings, std::vector<std::uint32_t> triangles,
+                 std::size_t particle_count);
+  ~CollisionStage();
+  CollisionStage(CollisionStage&&) noexcept;
+  CollisionStage& operator=(CollisionStage&&) noexcept;
+
+  /// The contacts of `state` (positions predicted, previous = start of the substep) for a
+  /// substep of length h under gravity of magnitude `gravity`: replaces `contacts` with
+  /// collider contacts and self-contacts (λ = 0). Runs its parallel loops in the calling
+  /// task arena.
+  void detect(const ParticleState& state, Real h, Real gravity, ConstraintSets& contacts);
+
+  const CollisionSettings& settings() const { return settings_; }
+  const CollisionStatistics& statistics() const { return statistics_; }
+  std::span<const std::uint32_t> triangles() const { return triangles_; }
+
+ private:
+  struct Buffers;
+  CollisionSettings settings_;
+  std::vector<std::uint32_t> triangles_;
+  std::size_t particle_count_ = 0;
+  std::unique_ptr<Buffers> buffers_;
+  CollisionStatistics statistics_;
+};
+
+}  // namespace tessera

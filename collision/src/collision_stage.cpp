@@ -1,0 +1,120 @@
+// The collision stage (collision_stage.hpp): colliders and self-collision, each substep.
+#include <tessera/collision/collision_stage.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include <tessera/collision/self_collision.hpp>
+#include <tessera/core/error.hpp>
+
+namespace tessera {
+
+namespace {
+
+void check_range(const char* name, Real value, Real low, Real high) {
+  if (!(std::isfinite(value) && value >= low && value <= high))
+    throw InvalidInput(std::string("collisions: ") + name + " must be in [" + std::to_string(low) +
+                       ", " + (std::isfinite(high) ? std::to_string(high) : std::string("inf")) +
+                       "), not " + std::to_string(value));
+}
+
+}  // namespace
+
+void check_collision_settings(const CollisionSettings& settings) {
+  constexpr Real kUnbounded = std::numeric_limits<Real>::max();
+  check_range("thickness", settings.thickness, 0, kUnbounded);
+  check_range("static friction", settings.static_friction, 0, kUnbounded);
+  check_range("dynamic friction", settings.dynamic_friction, 0, kUnbounded);
+  check_range("restitution", settings.restitution, 0, 1);
+  check_range("self-contact stiffness", settings.self_stiffness, 0, 1);
+  if (settings.self_collision && !(settings.thickness > 0))
+    throw InvalidInput("collisions: self-collision needs a positive thickness");
+}
+
+struct CollisionStage::Buffers {
+  ColliderHits hits;
+  std::unique_ptr<SelfCollision> self;
+  SelfCollision::Contacts self_contacts;
+};
+
+CollisionStage::CollisionStage(CollisionSettings settings, std::vector<std::uint32_t> triangles,
+                               std::size_t particle_count)
+    : settings_(std::move(settings)),
+      triangles_(std::move(triangles)),
+      particle_count_(particle_count),
+      buffers_(std::make_unique<Buffers>()) {
+  check_collision_settings(settings_);
+  if (triangles_.size() % 3 != 0)
+    throw InvalidInput("collisions: " + std::to_string(triangles_.size()) +
+                       " triangle indices, not a multiple of 3");
+  for (std::size_t i = 0; i < triangles_.size(); ++i)
+    if (triangles_[i] >= particle_count_)
+      throw InvalidInput("collisions: triangle " + std::to_string(i / 3) + " names particle " +
+                         std::to_string(triangles_[i]) + ", there are " +
+                         std::to_string(particle_count_));
+  if (settings_.self_collision && !triangles_.empty())
+    buffers_->self = std::make_unique<SelfCollision>(triangles_, particle_count_);
+}
+
+CollisionStage::~CollisionStage() = default;
+CollisionStage::CollisionStage(CollisionStage&&) noexcept = default;
+CollisionStage& CollisionStage::operator=(CollisionStage&&) noexcept = default;
+
+void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
+                            ConstraintSets& contacts) {
+  const auto start = std::chrono::steady_clock::now();
+  contacts = ConstraintSets();
+  Buffers& buffers = *buffers_;
+  // A contact reaches one thickness beyond the contact distance, so a particle the
+  // iterations push towards a collider (or a layer) still finds the contact made for it.
+  const Real margin = settings_.thickness;
+
+  find_collider_contacts(settings_.colliders, state, settings_.thickness, margin, buffers.hits);
+  const std::size_t hit_count = buffers.hits.particles.size();
+  if (hit_count != 0) {
+    // Slow approaches do not bounce (resting contacts would jitter): an approach slower
+    // than what gravity adds in two substeps gets e = 0.
+    const Real slow = 2 * gravity * h;
+    ColliderContactInput input{.particles = buffers.hits.particles,
+                               .particle_count = state.size(),
+                               .normals = buffers.hits.normals,
+                               .offsets = buffers.hits.offsets,
+                               .anchors = buffers.hits.anchors,
+                               .normal_speeds = buffers.hits.normal_speeds,
+                               .static_friction = settings_.static_friction,
+                               .dynamic_friction = settings_.dynamic_friction,
+                               .restitution = settings_.restitution};
+    contacts.collider_contact = make_collider_contacts(input);
+    auto& made = contacts.collider_contact;
+    for (std::size_t c = 0; c < hit_count; ++c)
+      if (-buffers.hits.normal_speeds[c] <= slow) made.restitution[c] = 0;
+  }
+  statistics_.collider_contacts = hit_count;
+  statistics_.vertex_triangle_contacts = statistics_.edge_edge_contacts = 0;
+
+  if (buffers.self) {
+    buffers.self->detect(state,
+                         {.thickness = settings_.thickness, .margin = margin,
+                          .stiffness = settings_.self_stiffness},
+                         buffers.self_contacts);
+    ProximityDistanceConstraintInput input{.particle_count = state.size(),
+                                           .rest_distance = settings_.thickness,
+                                           .compression_stiffness = settings_.self_stiffness,
+                                           .stretch_stiffness = 0};
+    input.particles = buffers.self_contacts.triangle_point;
+    contacts.triangle_point_distance = make_triangle_point_distance_constraints(input);
+    input.particles = buffers.self_contacts.edge_edge;
+    contacts.edge_edge_distance = make_edge_edge_distance_constraints(input);
+    statistics_.vertex_triangle_contacts = buffers.self_contacts.triangle_point.size() / 4;
+    statistics_.edge_edge_contacts = buffers.self_contacts.edge_edge.size() / 4;
+  }
+
+  ++statistics_.substeps;
+  statistics_.contacts_sum += statistics_.contacts();
+  statistics_.contacts_max = std::max(statistics_.contacts_max, statistics_.contacts());
+  statistics_.seconds_detection +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace tessera

@@ -35,7 +35,7 @@ CLI::Validator integer_from(std::size_t low, std::size_t high) {
 }
 
 CLI::Validator finite_number_above(double low, bool low_inclusive, const std::string& unit) {
-  std::string wanted = "must be a finite number of " + unit;
+  std::string wanted = unit.empty() ? "must be a finite number" : "must be a finite number of " + unit;
   const bool zero = low == 0;
   wanted += zero ? (low_inclusive ? " (0 or more)" : " above 0")
                  : (low_inclusive ? " of at least " : " above ") + std::to_string(low);

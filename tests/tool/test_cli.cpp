@@ -176,6 +176,26 @@ TEST_F(Cli, DivergenceIsANumericalFailureWithExitCodeOne) {
   EXPECT_EQ(run(groups).exit_code, 0);
 }
 
+// The drape: a free cloth falls onto a sphere and the ground, against itself too. It ends
+// outside the colliders (deeper than the thickness is a failure), without a self-intersection,
+// with the same state for 1 and 2 threads, and reports its contacts.
+TEST_F(Cli, DrapeEndsOnTheSphereWithoutPenetrationOrSelfIntersection) {
+  const std::vector<std::string> base = {"run", "drape:24", "--frames", "40", "--substeps", "16"};
+  auto one = base, two = base;
+  one.insert(one.end(), {"--threads", "1"});
+  two.insert(two.end(), {"--threads", "2"});
+  const Json a = run_json(one), b = run_json(two);
+  EXPECT_EQ(a["state_hash"], b["state_hash"]);
+  for (const char* key : {"contacts_mean", "contacts_max", "penetration_max", "self_intersections",
+                          "seconds_collision", "residual_collider_contact_max_final"})
+    EXPECT_TRUE(a.contains(key)) << key;
+  EXPECT_GT(a["contacts_max"].get<double>(), 24 * 24 / 4) << "a quarter of the cloth lies on the sphere";
+  EXPECT_LE(a["penetration_max"].get<double>(), 0.005) << "at most the thickness deep";
+  EXPECT_EQ(a["self_intersections"], 0);
+  // Without colliders nothing collides and nothing is reported.
+  EXPECT_FALSE(run_json({"run", "cloth:8", "--frames", "1"}).contains("contacts_mean"));
+}
+
 TEST_F(Cli, OneAndTwoThreadsGiveTheSameState) {
   std::map<std::string, std::string> hashes;
   for (const char* mode : {"gs", "jacobi", "hybrid", "sequential"}) {
@@ -301,6 +321,10 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
   write("key.json", R"({"generator": "cloth", "gravityy": [0, 0, 0]})");
   write("value.json", R"({"generator": "cloth", "iterations": 0})");
   write("empty.obj", "# nothing\n");
+  write("collider_missing.json",
+        R"({"generator": "cloth:8", "colliders": [{"shape": "mesh", "file": "bowl.obj"}]})");
+  write("collider_bad.json",
+        R"({"generator": "cloth:8", "colliders": [{"shape": "sphere", "centre": [0, 0, 0], "radius": -1}]})");
   const std::string strategies =
       "(known: greedy, largest-first, smallest-last, dsatur, stencil, iterated-greedy, random, metis)";
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
@@ -343,6 +367,13 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
       {{"run", "cloth:8", "--obj"}, "tessera run: --obj needs --out DIR"},
       {{"run", "cloth:8", "--out", "no/such/folder"}, "tessera run: --out: cannot create folder no/such/folder: No such file or directory"},
       {{"run", "cloth:8", "--out", "truncated.msh"}, "tessera run: --out: truncated.msh exists and is not a folder"},
+      {{"run", "--self-collision", "maybe"}, "tessera run: --self-collision: unknown value 'maybe' (known: on, off)"},
+      {{"run", "--thickness", "-1"}, "tessera run: --thickness: must be a finite number of metres (0 or more), not '-1'"},
+      {{"run", "--friction", "-0.5"}, "tessera run: --friction: must be a finite number (0 or more), not '-0.5'"},
+      {{"run", "cloth:8", "--self-collision", "on", "--thickness", "0"}, "tessera run: --thickness: must be positive with self-collision on"},
+      {{"run", "drape:1"}, "tessera run: scene 'drape:1': a cloth needs at least 2 vertices per side"},
+      {{"run", "collider_missing.json"}, "tessera run: " + (folder_ / "bowl.obj").string() + ": cannot open: no such file"},
+      {{"run", "collider_bad.json"}, "tessera run: collider_bad.json: 'colliders[0].radius' must be a number in (0, inf), not -1"},
       {{"color", "--strategy", "nope"}, "tessera color: unknown colouring strategy 'nope' " + strategies},
       {{"color", "--threads", "0"}, "tessera color: --threads: must be an integer from 1 to 4096, not '0'"},
       {{"color", "missing.node"}, "tessera color: missing.node: cannot open: no such file"},

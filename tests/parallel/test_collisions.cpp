@@ -1,0 +1,227 @@
+// The solver with a collision stage (Solver::set_collisions): contacts remade every substep
+// from the predicted positions, projected as a Jacobi set of their own. Known answers: a cloth
+// dropped on a sphere and a plane ends outside both (no deeper than the thickness) with
+// static particles untouched; Coulomb friction holds a block on a slope steeper-than-μ and
+// lets it slide on a shallower-than-μ one the other way round; restitution bounces a falling
+// particle back to e² of its height; every thread count and mode gives the same contacts.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <tessera/collision/self_intersections.hpp>
+#include <tessera/core/error.hpp>
+#include <tessera/parallel/solver.hpp>
+
+#include "scenes.hpp"
+
+namespace tessera {
+namespace {
+
+using test::make_solver;
+using test::same_bits;
+
+/// A free n × n cloth 1 m wide at y = 0, above a sphere of radius 0.25 whose top is 0.1 m
+/// below it, and the ground at y = −0.6 (the tool's drape scene, smaller).
+struct Drape {
+  std::size_t n;
+  Model model;
+  std::vector<std::uint32_t> triangles;
+  CollisionSettings collisions;
+
+  explicit Drape(std::size_t vertices) : n(vertices) {
+    io::ClothGrid grid = io::make_cloth_grid(n, n, Real(1) / Real(n - 1));
+    for (Vector3r& p : grid.positions) p = Vector3r(p.x(), 0, p.y());
+    model.particles =
+        ParticleState(grid.positions, std::vector<Real>(grid.vertex_count(), Real(1)));
+    model.constraints.distance =
+        make_distance_constraints({grid.edge_indices, grid.positions, Real(1), Real(0)});
+    model.constraints.dihedral = make_dihedral_constraints(
+        {grid.bending_indices, grid.positions, Real(1), Real(1e-3)});
+    triangles.assign(grid.triangle_indices.begin(), grid.triangle_indices.end());
+    collisions.colliders = {SphereCollider{kCentre, kRadius},
+                            PlaneCollider{Vector3r(0, 1, 0), kGround}};
+    collisions.thickness = Real(0.005);
+    collisions.self_collision = true;
+  }
+
+  static inline const Vector3r kCentre = Vector3r(Real(0.5), Real(-0.35), Real(0.5));
+  static constexpr Real kRadius = Real(0.25);
+  static constexpr Real kGround = Real(-0.6);
+};
+
+SolverSettings drape_settings(SolverMode mode, std::size_t threads) {
+  SolverSettings settings;
+  settings.mode = mode;
+  settings.threads = threads;
+  settings.substeps = 16;
+  settings.iterations = 1;
+  return settings;
+}
+
+/// The deepest any particle is inside the sphere or below the ground, in metres (0: none).
+Real deepest(const std::vector<Vector3r>& positions) {
+  Real depth = 0;
+  for (const Vector3r& p : positions) {
+    depth = std::max(depth, Drape::kRadius - (p - Drape::kCentre).norm());
+    depth = std::max(depth, Drape::kGround - p.y());
+  }
+  return depth;
+}
+
+TEST(Collisions, ADrapedClothEndsOutsideTheSphereAndTheGroundWithoutIntersectingItself) {
+  Drape drape(20);
+  Solver solver = make_solver(drape.model, drape_settings(SolverMode::gs, 2));
+  solver.set_collisions(drape.collisions, drape.triangles);
+  for (int frame = 0; frame < 45; ++frame) solver.step();
+  const std::vector<Vector3r> positions = solver.positions();
+  // On the sphere: the middle of the cloth rests on its top, a thickness above it.
+  const Vector3r middle = positions[(drape.n / 2) * drape.n + drape.n / 2];
+  EXPECT_NEAR((middle - Drape::kCentre).norm(), Drape::kRadius + drape.collisions.thickness,
+              Real(0.01));
+  EXPECT_LE(deepest(positions), Real(1e-3));
+  EXPECT_EQ(count_self_intersections(positions, drape.triangles), 0u);
+  const CollisionStatistics& found = solver.collisions()->statistics();
+  EXPECT_EQ(found.substeps, 45u * 16u);
+  EXPECT_GT(found.collider_contacts, drape.n * drape.n / 8) << "the cloth lies on the sphere";
+  EXPECT_GE(found.contacts_max, found.contacts());
+  EXPECT_GT(found.seconds_detection, 0);
+  // Without the stage the same cloth falls through the sphere.
+  Solver falling = make_solver(drape.model, drape_settings(SolverMode::gs, 2));
+  for (int frame = 0; frame < 45; ++frame) falling.step();
+  EXPECT_GT(deepest(falling.positions()), Real(0.1));
+}
+
+TEST(Collisions, EveryThreadCountGivesTheSameStateAndEveryModeStaysOutside) {
+  Drape drape(12);
+  for (const SolverMode mode : test::kSolverModes) {
+    std::vector<Vector3r> first;
+    for (const std::size_t threads : {1u, 2u}) {
+      Solver solver = make_solver(drape.model, drape_settings(mode, threads));
+      solver.set_collisions(drape.collisions, drape.triangles);
+      for (int frame = 0; frame < 30; ++frame) solver.step();
+      const auto positions = solver.positions();
+      EXPECT_LE(deepest(positions), Real(2e-3)) << test::mode_name(mode);
+      if (first.empty()) first = positions;
+      else EXPECT_TRUE(same_bits(first, positions)) << test::mode_name(mode);
+    }
+  }
+}
+
+/// A particle resting on a plane tilted by θ about z (normal (−sin θ, cos θ, 0)), with
+/// static friction μs = μk = μ; how far it moves in one second from rest.
+Real slide(Real theta, Real mu) {
+  Model model;
+  const Vector3r normal(-std::sin(theta), std::cos(theta), 0);
+  const Real thickness = Real(0.001);
+  // Resting on the plane through the origin, a thickness above it.
+  const std::vector<Vector3r> start = {normal * thickness};
+  model.particles = ParticleState(start, std::vector<Real>{Real(1)});
+  SolverSettings settings;
+  settings.mode = SolverMode::gs;
+  settings.substeps = 20;
+  settings.iterations = 2;
+  Solver solver(model, settings);
+  CollisionSettings collisions;
+  collisions.colliders = {PlaneCollider{normal, 0}};
+  collisions.thickness = thickness;
+  collisions.static_friction = collisions.dynamic_friction = mu;
+  solver.set_collisions(collisions, {});
+  for (int frame = 0; frame < 60; ++frame) solver.step();
+  const Vector3r moved = solver.position(0) - start[0];
+  EXPECT_NEAR(normal.dot(solver.position(0)), thickness, Real(1e-4)) << "stays on the plane";
+  return moved.norm();
+}
+
+TEST(Collisions, StaticFrictionHoldsBelowItsAngleAndLetsGoAboveIt) {
+  const Real theta = Real(0.3);  // tan θ = 0.309
+  EXPECT_LT(slide(theta, Real(0.4)), Real(1e-4)) << "μ > tan θ: stays put";
+  // μ < tan θ: slides with a = g (sin θ − μ cos θ), about 0.5 a t² in one second.
+  const Real mu = Real(0.2);
+  const Real a = Real(9.81) * (std::sin(theta) - mu * std::cos(theta));
+  EXPECT_NEAR(slide(theta, mu), Real(0.5) * a, Real(0.15) * Real(0.5) * a);
+  // No friction: the whole of g sin θ.
+  const Real free = Real(0.5) * Real(9.81) * std::sin(theta);
+  EXPECT_NEAR(slide(theta, 0), free, Real(0.1) * free);
+}
+
+/// The highest point a particle dropped from 1 m above the ground reaches after its first
+/// bounce, with restitution e.
+Real bounce(Real e) {
+  Model model;
+  model.particles = ParticleState(std::vector<Vector3r>{Vector3r(0, 1, 0)}, std::vector<Real>{1});
+  SolverSettings settings;
+  settings.mode = SolverMode::gs;
+  settings.substeps = 40;
+  settings.iterations = 1;
+  Solver solver(model, settings);
+  CollisionSettings collisions;
+  collisions.colliders = {PlaneCollider{Vector3r(0, 1, 0), 0}};
+  collisions.thickness = 0;
+  collisions.restitution = e;
+  collisions.static_friction = collisions.dynamic_friction = 0;
+  solver.set_collisions(collisions, {});
+  bool bounced = false;
+  Real highest = 0;
+  for (int frame = 0; frame < 150; ++frame) {
+    solver.step();
+    const Real vy = solver.velocity(0).y(), y = solver.position(0).y();
+    if (!bounced && vy > 0) bounced = true;
+    if (bounced) highest = std::max(highest, y);
+    if (bounced && vy < 0) break;
+  }
+  EXPECT_GE(solver.position(0).y(), Real(-1e-4));
+  return highest;
+}
+
+TEST(Collisions, RestitutionBouncesToESquaredOfTheHeight) {
+  EXPECT_NEAR(bounce(Real(0.5)), Real(0.25), Real(0.03));
+  EXPECT_NEAR(bounce(Real(0.8)), Real(0.64), Real(0.04));
+  EXPECT_LT(bounce(0), Real(0.01)) << "e = 0: it stays down";
+}
+
+TEST(Collisions, StaticParticlesNeverMoveAndBadSettingsAreErrors) {
+  Drape drape(8);
+  // Pin the cloth's middle inside the sphere: contacts never move it.
+  const std::size_t middle = (drape.n / 2) * drape.n + drape.n / 2;
+  drape.model.particles.inverse_mass[middle] = 0;
+  drape.model.particles.set_position(middle, Drape::kCentre);
+  Solver solver = make_solver(drape.model, drape_settings(SolverMode::jacobi, 2));
+  solver.set_collisions(drape.collisions, drape.triangles);
+  for (int frame = 0; frame < 10; ++frame) solver.step();
+  EXPECT_EQ(solver.position(ParticleIndex(middle)), Drape::kCentre);
+
+  const auto error = [&](CollisionSettings settings, std::vector<std::uint32_t> triangles) {
+    try {
+      solver.set_collisions(std::move(settings), triangles);
+    } catch (const InvalidInput& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  CollisionSettings bad = drape.collisions;
+  bad.thickness = -1;
+  EXPECT_NE(error(bad, drape.triangles).find("thickness"), std::string::npos);
+  bad = drape.collisions;
+  bad.static_friction = -0.5;
+  EXPECT_NE(error(bad, drape.triangles).find("static friction"), std::string::npos);
+  bad = drape.collisions;
+  bad.restitution = 2;
+  EXPECT_NE(error(bad, drape.triangles).find("restitution"), std::string::npos);
+  bad = drape.collisions;
+  bad.thickness = 0;
+  EXPECT_NE(error(bad, drape.triangles).find("self-collision needs a positive thickness"),
+            std::string::npos);
+  EXPECT_EQ(error(drape.collisions, {0, 1, 999}),
+            "collisions: surface triangle 0 names particle 999, the model has 64");
+  EXPECT_EQ(error(drape.collisions, {0, 1}),
+            "collisions: the surface has 2 triangle indices, not a multiple of 3");
+  // Clearing the stage drops the contacts.
+  solver.clear_collisions();
+  EXPECT_EQ(solver.collisions(), nullptr);
+  EXPECT_EQ(solver.contacts().size(), 0u);
+}
+
+}  // namespace
+}  // namespace tessera

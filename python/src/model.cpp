@@ -207,6 +207,15 @@ struct Family<TetherConstraints> {
   }
 };
 
+/// Collider contacts are made each substep by the collision module from the colliders and the
+/// particles' positions and velocities, not set from Python (like particle–tet contacts).
+template <>
+struct Family<ColliderContacts> {
+  using Batch = ColliderContacts;
+  using Input = ColliderContactInput;
+  static auto parameters() { return std::tuple{}; }
+};
+
 #undef TESSERA_REAL
 
 // ---- generic over the families ---------------------------------------------------------

@@ -922,6 +922,29 @@ TEST(BatchedResiduals, ParticleTetContact) {
   expect_batched_residuals_match(contacts, current, random, scene.deformation);
 }
 
+TEST(BatchedResiduals, ColliderContact) {
+  // One particle per contact (a random numbering), each against a random plane through a
+  // point up to 1 away: about half penetrate.
+  Random random(114);
+  std::vector<Vector3r> current(kBatchedCount);
+  std::vector<ParticleIndex> particles(kBatchedCount);
+  std::iota(particles.begin(), particles.end(), ParticleIndex(0));
+  for (std::size_t i = kBatchedCount - 1; i > 0; --i)
+    std::swap(particles[i], particles[std::size_t(random.integer(0, int(i)))]);
+  std::vector<Vector3r> normals, anchors;
+  std::vector<Real> offsets, speeds(kBatchedCount, Real(0));
+  for (std::size_t c = 0; c < kBatchedCount; ++c) {
+    current[particles[c]] = random.vector(-5, 5);
+    normals.push_back(random.unit_vector());
+    offsets.push_back(normals.back().dot(current[particles[c]]) + random.uniform(-1, 1));
+    anchors.push_back(current[particles[c]]);
+  }
+  const ColliderContacts contacts = make_collider_contacts(
+      {particles, kBatchedCount, normals, offsets, anchors, speeds});
+  expect_batched_residuals_match(contacts, current, random,
+                                 std::vector<Deformation>(kBatchedCount, Deformation::general));
+}
+
 TEST(BatchedResiduals, ShapeMatching) {
   // Clusters of 4 to 12 particles over a random numbering, rigid and stretchy.
   Random random(113);

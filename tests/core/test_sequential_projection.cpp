@@ -637,6 +637,51 @@ struct Contact {
   }
 };
 
+/// Collider contacts: one particle each, a random plane through a point up to 0.3 above it
+/// (so most push) and its rest position as the anchor (so friction has sliding to act on).
+/// A chain puts two contacts on each particle (two colliders meeting at it): one-particle
+/// constraints share particles no other way.
+struct ColliderContact {
+  static constexpr int N = 1;
+  using Batch = ColliderContacts;
+  static constexpr SemanticsSupport kSemantics = SemanticsSupport::pbd_for_both;
+  static constexpr bool kHasLambda = true;
+  static constexpr std::array<int, N> kChainSlot = {0};
+  static constexpr std::size_t kConstraintsPerParticle = 2;
+
+  static Points<N> random_shape(Random& r) { return {r.vector(-5, 5)}; }
+  static Batch build(const ConstraintSet<N>& set, const std::vector<Vector3r>& rest,
+                     Random& r) {
+    std::vector<Vector3r> normals, anchors;
+    std::vector<Real> offsets, speeds;
+    for (std::size_t c = 0; c < set.count; ++c) {
+      const Vector3r n = r.unit_vector();
+      normals.push_back(n);
+      offsets.push_back(n.dot(set.points(c)[0]) + uniform(r, -0.05, 0.3));
+      anchors.push_back(rest[set.indices[c]]);
+      speeds.push_back(uniform(r, -2, 1));
+    }
+    Batch batch = make_collider_contacts(
+        {set.indices, set.positions.size(), normals, offsets, anchors, speeds});
+    for (std::size_t c = 0; c < set.count; ++c) {
+      batch.static_friction[c] = uniform(r, 0, 1);
+      batch.dynamic_friction[c] = uniform(r, 0, 1) * batch.static_friction[c];
+    }
+    return batch;
+  }
+  static void batched(ParticleArrays p, Batch& b, std::size_t begin, std::size_t end,
+                      const ProjectionSettings&) {
+    project_collider_contacts(p, b, begin, end);
+  }
+  static void solve(Batch& b, std::size_t c, const Points<N>& x, const Masses<N>& w,
+                    const ProjectionSettings&, Points<N>& corr) {
+    PositionBasedDynamicsExtensions::solve_ColliderContactConstraint(
+        x[0], w[0], Vector3r(b.normal[0][c], b.normal[1][c], b.normal[2][c]), b.offset[c],
+        Vector3r(b.anchor[0][c], b.anchor[1][c], b.anchor[2][c]), b.static_friction[c],
+        b.dynamic_friction[c], b.lambda[c], corr[0]);
+  }
+};
+
 // ----------------------------------------------------------------------------- helpers
 
 template <class F>
@@ -658,12 +703,23 @@ std::vector<Vector3r> perturbed(std::vector<Vector3r> points, Random& random, Re
 }
 
 /// A chain of `count` constraints along a helix: constraint c uses the N consecutive particles
-/// c .. c+N-1 (slot k ← particle c + kChainSlot[k]), so neighbours share N - 1 particles.
+/// from s = c / constraints_per_particle<F>() (slot k ← particle s + kChainSlot[k]), so
+/// neighbours share N - 1 particles (or, one per particle, all of them).
 /// Every seventh particle is static, and the first sits at x = -0 (a write of +0 to it would
 /// show in its sign bit). `rest` receives rest positions on a slightly different helix.
 Vector3r helix(std::size_t i) {
   const Real t = Real(2) * Real(i);
   return Vector3r(std::cos(t), std::sin(t), Real(0.35) * Real(i));
+}
+
+/// How many consecutive constraints of a chain start at the same particle: 1, or the family's
+/// kConstraintsPerParticle (a one-particle family shares particles only that way).
+template <class F>
+constexpr std::size_t constraints_per_particle() {
+  if constexpr (requires { F::kConstraintsPerParticle; })
+    return F::kConstraintsPerParticle;
+  else
+    return 1;
 }
 
 template <class F>
@@ -681,7 +737,8 @@ ConstraintSet<F::N> make_chain(Random& random, std::size_t count, std::vector<Ve
   chain.positions[0].x() = -Real(0);
   for (std::size_t c = 0; c < count; ++c)
     for (std::size_t k = 0; k < N; ++k)
-      chain.indices.push_back(ParticleIndex(c + std::size_t(F::kChainSlot[k])));
+      chain.indices.push_back(
+          ParticleIndex(c / constraints_per_particle<F>() + std::size_t(F::kChainSlot[k])));
   return chain;
 }
 
@@ -749,7 +806,7 @@ class SequentialProjection : public ::testing::Test {};
 
 using Families = ::testing::Types<Distance, Dihedral, Volume, IsometricBending, EdgePoint,
                                   TrianglePoint, EdgeEdge, StrainTriangle, StrainTetra,
-                                  FEMTriangle, FEMTetra, Contact, Tether>;
+                                  FEMTriangle, FEMTetra, Contact, Tether, ColliderContact>;
 
 class FamilyNames {
  public:
@@ -767,6 +824,7 @@ class FamilyNames {
     if (std::is_same_v<F, FEMTriangle>) return "FEMTriangle";
     if (std::is_same_v<F, FEMTetra>) return "FEMTetra";
     if (std::is_same_v<F, Tether>) return "Tether";
+    if (std::is_same_v<F, ColliderContact>) return "ColliderContact";
     return "ParticleTetContact";
   }
 };

@@ -196,6 +196,25 @@ void add_family(Bytes& in, const Decoded& d, ConstraintSets& sets) {
            .compliance = in.value()});
       break;
     }
+    case ConstraintFamily::collider_contact: {
+      const auto p = indices(in, 1, n);
+      // Mostly unit normals, sometimes not; counts off by one now and then.
+      const std::size_t count = p.size() + (in.byte() % 8 == 0 ? 1 : 0);
+      std::vector<Vector3r> normals, anchors;
+      std::vector<Real> offsets, speeds;
+      for (std::size_t c = 0; c < count; ++c) {
+        const Vector3r normal(in.value(), in.value(), in.value());
+        normals.push_back(in.byte() < 224 && normal.norm() > Real(1e-3)
+                              ? Vector3r(normal.normalized())
+                              : normal);
+        offsets.push_back(in.value());
+        anchors.emplace_back(in.value(), in.value(), in.value());
+        speeds.push_back(in.value());
+      }
+      sets.collider_contact = make_collider_contacts(
+          {p, n, normals, offsets, anchors, speeds, in.value(), in.value(), in.value()});
+      break;
+    }
   }
 }
 

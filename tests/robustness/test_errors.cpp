@@ -355,6 +355,27 @@ TEST(ErrorCatalogue, TetherAndLongRangeAttachmentInput) {
             "long-range attachments: 3 edge indices is not a whole number of edges (2 each)");
 }
 
+TEST(ErrorCatalogue, ColliderContactInput) {
+  const std::vector<ParticleIndex> two = {0, 1};
+  const std::vector<Vector3r> normals = {Vector3r(0, 0, 1), Vector3r(0, 0, 2)};
+  const std::vector<Vector3r> anchors(2, Vector3r::Zero());
+  const std::vector<Real> offsets = {0, 0}, speeds = {0, 0}, one = {0};
+  EXPECT_EQ(invalid_input([&] {
+              make_collider_contacts({two, 2, normals, offsets, anchors, speeds});
+            }),
+            "collider contact constraint 1: normal is not a unit vector");
+  EXPECT_EQ(invalid_input([&] {
+              make_collider_contacts({two, 2, normals, one, anchors, speeds});
+            }),
+            "collider contact constraints: 2 contacts but 2 normals, 1 offsets, 2 anchors and "
+            "2 normal speeds");
+  const std::vector<Vector3r> up(2, Vector3r(0, 0, 1));
+  EXPECT_EQ(invalid_input([&] {
+              make_collider_contacts({two, 2, up, offsets, anchors, speeds, 0, 0, Real(1.5)});
+            }),
+            "collider contact constraints: restitution is 1.5, must lie in [0, 1]");
+}
+
 TEST(ErrorCatalogue, DivergenceBoundAndADivergedStep) {
   const Model small = test::cloth_model(3, 3);
   SolverSettings settings;

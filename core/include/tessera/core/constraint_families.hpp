@@ -29,6 +29,7 @@
 #include <type_traits>
 #include <utility>
 
+#include <tessera/core/collider_contact_constraints.hpp>
 #include <tessera/core/constraint_batch.hpp>
 #include <tessera/core/dihedral_constraints.hpp>
 #include <tessera/core/distance_constraints.hpp>
@@ -60,7 +61,8 @@
   X(fem_tetra, FEMTetraConstraints)                             \
   X(shape_matching, ShapeMatchingConstraints)                   \
   X(particle_tet_contact, ParticleTetContacts)                  \
-  X(tether, TetherConstraints)
+  X(tether, TetherConstraints)                                  \
+  X(collider_contact, ColliderContacts)
 
 namespace tessera {
 

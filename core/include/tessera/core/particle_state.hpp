@@ -76,4 +76,11 @@ struct ParticleArrays {
   }
 };
 
+/// The velocity arrays of a state, in the form the velocity passes of the contact families
+/// read and write (x, y, z are the velocity components; inverse masses as for positions).
+inline ParticleArrays velocity_arrays_of(ParticleState& state) {
+  return {state.velocity_x.data(), state.velocity_y.data(), state.velocity_z.data(),
+          state.inverse_mass.data(), state.size()};
+}
+
 }  // namespace tessera

@@ -61,13 +61,6 @@ struct ParticleTetContacts {
   std::size_t size() const { return particles.count; }
 };
 
-/// The velocity arrays of a state, in the form the velocity solve reads and writes (x, y, z
-/// are the velocity components; inverse masses as for positions).
-inline ParticleArrays velocity_arrays_of(ParticleState& state) {
-  return {state.velocity_x.data(), state.velocity_y.data(), state.velocity_z.data(),
-          state.inverse_mass.data(), state.size()};
-}
-
 /// Validates the contacts against `state` (its inverse masses and velocities are read for
 /// init_) and builds the batch with λ = 0. Throws InvalidInput naming the contact for: an
 /// index out of range, a particle named twice, non-finite barycentric coordinates, a normal
@@ -88,7 +81,8 @@ void project_particle_tet_contacts(ParticleArrays particles, ParticleTetContacts
 
 /// Velocity solve (friction) of contacts [begin, end) after the velocity update of a substep
 /// of length dt: the normal impulse per unit time is λ / dt. `velocities` as given by
-/// velocity_arrays_of. Same sharing rules as the position solve; λ is only read.
+/// velocity_arrays_of (particle_state.hpp). Same sharing rules as the position solve; λ is
+/// only read.
 void solve_particle_tet_contact_velocities(ParticleArrays velocities,
                                            const ParticleTetContacts& contacts,
                                            std::size_t begin, std::size_t end, Real dt);

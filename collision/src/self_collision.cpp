@@ -161,13 +161,14 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
                                   triangles_[3 * t + 2]};
     triangle_boxes_[t] = particles.reach_box(ids, motion_.data(), 0);
   });
-  edge_boxes_.resize(edge_count);
-  parallel_over(edge_count, [&](std::size_t e) {
+  const std::size_t edge_queries = settings.edge_edge ? edge_count : 0;
+  edge_boxes_.resize(edge_queries);
+  parallel_over(edge_queries, [&](std::size_t e) {
     const std::uint32_t ids[2] = {edges_[2 * e], edges_[2 * e + 1]};
     edge_boxes_[e] = particles.reach_box(ids, motion_.data(), reach / 2);
   });
-  triangle_hash_.build(triangle_boxes_);
-  edge_hash_.build(edge_boxes_);
+  triangle_grid_.build(triangle_boxes_);
+  edge_grid_.build(edge_boxes_);
 
   // Vertex–triangle: p against the triangles its box meets.
   chunks_->triangle_point.run(
@@ -176,7 +177,7 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
         const std::uint32_t p = std::uint32_t(vertex);
         const std::size_t first = buffer.size();
         const Vector3r start = particles.start(p);
-        triangle_hash_.for_each_overlap(vertex_boxes_[p], [&](std::uint32_t t) {
+        triangle_grid_.for_each_overlap(vertex_boxes_[p], [&](std::uint32_t t) {
           const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1],
                               c = triangles_[3 * t + 2];
           if (p == a || p == b || p == c || particles.all_static({p, a, b, c})) return;
@@ -194,15 +195,14 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
 
   // Edge–edge: each edge against the higher edges its box meets.
   chunks_->edge_edge.run(
-      edge_count,
+      edge_queries,
       [&](std::size_t edge, std::vector<Pair>& buffer) {
         const std::uint32_t e = std::uint32_t(edge);
         const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
         const std::size_t first = buffer.size();
         const Vector3r s0 = particles.start(p0), s1 = particles.start(p1);
         const Real own_motion = std::max(motion_[p0], motion_[p1]);
-        edge_hash_.for_each_overlap(edge_boxes_[e], [&](std::uint32_t f) {
-          if (f <= e) return;
+        edge_grid_.for_each_overlap_above(edge_boxes_[e], e, [&](std::uint32_t f) {
           const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
           if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3 ||
               particles.all_static({p0, p1, p2, p3}))

@@ -206,8 +206,8 @@ std::size_t count_self_intersections(std::span<const Vector3r> positions,
                             .cwiseMax(positions[triangles[3 * t + 2]]);
     boxes[t] = {{lo.x(), lo.y(), lo.z()}, {hi.x(), hi.y(), hi.z()}};
   }
-  SpatialHash hash;
-  hash.build(boxes);
+  UniformGrid grid;
+  grid.build(boxes);
   const auto corners = [&](std::size_t t) {
     return std::array<Point, 3>{positions[triangles[3 * t]].cast<double>(),
                                 positions[triangles[3 * t + 1]].cast<double>(),
@@ -219,8 +219,7 @@ std::size_t count_self_intersections(std::span<const Vector3r> positions,
         for (std::size_t t = range.begin(); t != range.end(); ++t) {
           const std::uint32_t* v = triangles.data() + 3 * t;
           const auto a = corners(t);
-          hash.for_each_overlap(boxes[t], [&](std::uint32_t u) {
-            if (u <= t) return;
+          grid.for_each_overlap_above(boxes[t], std::uint32_t(t), [&](std::uint32_t u) {
             const std::uint32_t* w = triangles.data() + 3 * std::size_t(u);
             for (int i = 0; i < 3; ++i)
               for (int j = 0; j < 3; ++j)

@@ -3,7 +3,6 @@
 #include <tessera/collision/spatial_hash.hpp>
 
 #include <algorithm>
-#include <bit>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -12,54 +11,69 @@
 
 namespace tessera {
 
-void SpatialHash::build(std::span<const Aabb> boxes, Real cell_size) {
+void UniformGrid::build(std::span<const Aabb> boxes, Real cell_size) {
   const std::size_t n = boxes.size();
-  Real largest_extent = 0;
+  double lowest[3] = {0, 0, 0}, highest[3] = {0, 0, 0};  // of the lower corners
+  largest_extent_ = 0;
+  if (n > 0)
+    for (int axis = 0; axis < 3; ++axis) lowest[axis] = highest[axis] = boxes[0].lo[axis];
   for (const Aabb& box : boxes)
+    for (int axis = 0; axis < 3; ++axis) {
+      lowest[axis] = std::min(lowest[axis], double(box.lo[axis]));
+      highest[axis] = std::max(highest[axis], double(box.lo[axis]));
+      largest_extent_ = std::max(largest_extent_, double(box.hi[axis]) - double(box.lo[axis]));
+    }
+  // Points only (extent 0) get a cell from the span instead.
+  cell_size_ = cell_size > 0 ? double(cell_size) : largest_extent_ * kCellPerExtent;
+  const auto cells_at = [&](double size) {
+    double cells = 1;
     for (int axis = 0; axis < 3; ++axis)
-      largest_extent = std::max(largest_extent, box.hi[axis] - box.lo[axis]);
-  // A zero cell (every box a point) would divide by zero: any positive size is correct for
-  // points, and their spacing is unknown here, so 1 stands in.
-  cell_size_ = std::max(cell_size, largest_extent);
-  if (!(cell_size_ > 0)) cell_size_ = 1;
-  inverse_cell_size_ = Real(1) / cell_size_;
+      cells *= std::floor((highest[axis] - lowest[axis]) / size) + 1;
+    return cells;
+  };
+  const double most_cells = double(kCellsPerBox * n + 64);
+  if (!(cell_size_ > 0)) {
+    const double span = std::max({highest[0] - lowest[0], highest[1] - lowest[1],
+                                  highest[2] - lowest[2]});
+    cell_size_ = span > 0 ? span / std::cbrt(most_cells) : 1;
+  }
+  // Spread-out boxes: grow the cell until the grid fits (each step at least 25%).
+  for (double cells = cells_at(cell_size_); cells > most_cells; cells = cells_at(cell_size_))
+    cell_size_ *= std::max(1.25, std::cbrt(cells / most_cells));
+  inverse_cell_size_ = 1 / cell_size_;
+  for (int axis = 0; axis < 3; ++axis) {
+    origin_[axis] = lowest[axis];
+    dims_[axis] = std::int64_t((highest[axis] - lowest[axis]) * inverse_cell_size_) + 1;
+  }
+  const std::size_t cells = std::size_t(dims_[0] * dims_[1] * dims_[2]);
 
-  // M buckets, a power of two at least n: about one box per bucket, and a bucket is found
-  // by a shift instead of a modulo.
-  const std::size_t buckets = std::bit_ceil(std::max<std::size_t>(n, 2));
-  bucket_shift_ = 64 - std::countr_zero(buckets);
-
-  key_of_box_.resize(n);
-  bucket_of_box_.resize(n);
+  cell_of_box_.resize(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
                         const Aabb& box = boxes[i];
-                        const std::uint64_t key =
-                            cell_key(cell_coordinate(box.lo[0]), cell_coordinate(box.lo[1]),
-                                     cell_coordinate(box.lo[2]));
-                        key_of_box_[i] = key;
-                        bucket_of_box_[i] = std::uint32_t(bucket_of(key));
+                        cell_of_box_[i] = std::uint32_t(
+                            (cell_coordinate(box.lo[2], 2) * dims_[1] +
+                             cell_coordinate(box.lo[1], 1)) * dims_[0] +
+                            cell_coordinate(box.lo[0], 0));
                       }
                     });
 
-  // Counting sort, sequential: its three passes over n entries cost less than a task
-  // fan-out at cloth sizes, and the stable scatter keeps each bucket in box order.
-  bucket_start_.assign(buckets + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) ++bucket_start_[bucket_of_box_[i] + 1];
-  for (std::size_t b = 0; b < buckets; ++b) bucket_start_[b + 1] += bucket_start_[b];
-  entry_key_.resize(n);
+  // Counting sort, sequential: its passes over n entries and ≤ 4n + 64 cells cost less than
+  // a task fan-out at cloth sizes, and the stable scatter keeps each cell in box order.
+  cell_start_.assign(cells + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) ++cell_start_[cell_of_box_[i] + 1];
+  for (std::size_t c = 0; c < cells; ++c) cell_start_[c + 1] += cell_start_[c];
   entry_index_.resize(n);
   entry_box_.resize(n);
-  // bucket_start_[b] serves as bucket b's write cursor, then is shifted back.
+  // cell_start_[c] serves as cell c's write cursor, then is shifted back.
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t e = bucket_start_[bucket_of_box_[i]]++;
-    entry_key_[e] = key_of_box_[i];
+    const std::uint32_t e = cell_start_[cell_of_box_[i]]++;
     entry_index_[e] = std::uint32_t(i);
     entry_box_[e] = boxes[i];
   }
-  for (std::size_t b = buckets; b > 0; --b) bucket_start_[b] = bucket_start_[b - 1];
-  bucket_start_[0] = 0;
+  for (std::size_t c = cells; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
+  cell_start_[0] = 0;
 }
 
 namespace {
@@ -73,7 +87,7 @@ void sort_small(CandidatePair* first, CandidatePair* last) {
 
 }  // namespace
 
-void SpatialHash::self_pairs(std::vector<CandidatePair>& out) const {
+void UniformGrid::self_pairs(std::vector<CandidatePair>& out) const {
   detail::ChunkedOutput<CandidatePair> chunks;
   const std::size_t n = size();
   // Box i's query is its own box: the entries are looked up by index, not by position.
@@ -83,15 +97,15 @@ void SpatialHash::self_pairs(std::vector<CandidatePair>& out) const {
       n,
       [&](std::size_t i, std::vector<CandidatePair>& buffer) {
         const std::size_t first = buffer.size();
-        for_each_overlap(box_of[i], [&](std::uint32_t j) {
-          if (j > i) buffer.push_back({std::uint32_t(i), j});
+        for_each_overlap_above(box_of[i], std::uint32_t(i), [&](std::uint32_t j) {
+          buffer.push_back({std::uint32_t(i), j});
         });
         sort_small(buffer.data() + first, buffer.data() + buffer.size());
       },
       out);
 }
 
-void SpatialHash::query_pairs(std::span<const Aabb> queries,
+void UniformGrid::query_pairs(std::span<const Aabb> queries,
                               std::vector<CandidatePair>& out) const {
   detail::ChunkedOutput<CandidatePair> chunks;
   chunks.run(

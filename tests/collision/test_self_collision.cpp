@@ -94,6 +94,12 @@ TEST(SelfCollision, AdjacentEdgesAreNoContactCrossingEdgesAre) {
   const ParticleState state(positions, std::vector<Real>(5, 1));
   const Contacts contacts = detect(triangles, state);
   EXPECT_EQ(contacts.edge_edge, (std::vector<ParticleIndex>{0, 3, 1, 2, 1, 2, 3, 4}));
+  // Switched off, the edge–edge list is empty and the vertex–triangle one unchanged.
+  SelfCollisionSettings vertex_triangle_only = kSettings;
+  vertex_triangle_only.edge_edge = false;
+  const Contacts without = detect(triangles, state, vertex_triangle_only);
+  EXPECT_TRUE(without.edge_edge.empty());
+  EXPECT_EQ(without.triangle_point, contacts.triangle_point);
   // Vertex 4 hovers 0.05 over triangle (0, 1, 2), whose corner it is not; vertex 3 is 0.7
   // past its hypotenuse, and 1 and 2 are far from the thin triangle.
   EXPECT_EQ(contacts.triangle_point, (std::vector<ParticleIndex>{4, 0, 1, 2}));

@@ -36,6 +36,16 @@
 //
 // Determinism: contacts are listed sorted by (vertex, triangle) and (edge, edge) for any
 // thread count.
+//
+// Cost (bench/collision_benchmarks.cpp, 128² cloth folded onto itself, thickness 0.4 h,
+// margin 0.1 h, one thread, CPU time on a loaded 2-core VM): about 20 ms per detection,
+// 6–7 ms without edge–edge contacts, against 0.5 ms for one distance sweep of that cloth —
+// far above a budget of two sweeps. The work is in the candidates, not in the lookups: each
+// of the 48,641 edges' boxes (h long, grown by r/2 + motion) overlaps ~17 others, ~7 of them
+// sharing no vertex (a segment distance each), and each of the 16,384 vertices meets ~9
+// triangle boxes. A cheaper detection has to test fewer pairs: edge–edge off (the setting
+// below), detection every k substeps with a margin for k substeps of motion, or culling flat
+// patches (normal cones) before the primitives.
 #pragma once
 
 #include <cstddef>

@@ -1,29 +1,41 @@
-// A uniform spatial hash over axis-aligned boxes: the broad phase of self-collision and of the
-// self-intersection count.
+// A uniform grid over axis-aligned boxes (a sorted-cell grid): the broad phase of
+// self-collision and of the self-intersection count.
 //
-//   build:  box i ──► cell of its lower corner ──► bucket = hash(cell) mod M
-//           counting sort by bucket (stable: entries of a bucket in box order)
+//   build:  box i ──► cell of its lower corner, cells numbered x fastest, then y, then z
+//           counting sort by cell (stable: the entries of a cell in box order)
 //
-//     bucket_start:  [0 | 2 | 2 | 5 | ...]        entries: (cell key, box index, box) sorted
-//                     b0  b1  b2  b3                        by bucket, then by box index
+//     cell_start: [0 | 0 | 2 | 3 | 3 | ...]      entries: (box index, box) by cell, then index
+//                  c0  c1  c2  c3  c4
 //
-//   query box q: every cell from cell(q.lo) - 1 to cell(q.hi) on each axis; in each cell's
-//   bucket, the entries whose cell key is that cell (hash collisions are skipped by the key,
-//   so no box is visited twice) and whose box overlaps q.
+//   query box q: the cells from q.lo − E to q.hi on each axis (E the largest built extent);
+//   the cells x0..x1 of one (y, z) row are consecutive, so each row is one run of entries,
+//   and each entry whose box overlaps q is visited.
 //
-// Why the lower corner and one cell back: with the cell size at least the largest built box
-// extent, a box b overlapping q has q.lo - cell ≤ b.lo ≤ q.hi on every axis, so its lower
-// corner lies in those cells; each box sits in exactly one cell, so the build is one pass
-// and the query needs no duplicate removal.
+// Why the lower corner and E back: a box b overlapping q has q.lo − E ≤ b.lo ≤ q.hi on every
+// axis, so its lower corner lies in those cells, whatever the cell size; each box sits in
+// exactly one cell, so the build is one counting sort and no box is visited twice. The cell
+// (E/3 by default) only trades the runs' overhang against their count. The grid spans the
+// boxes' lower corners, at most kCellsPerBox cells per box (the cell grows if the boxes are
+// spread out), and a coordinate outside it is clamped to its border cell (monotone, so
+// nothing is missed): memory stays O(n) whatever the positions.
 //
-// Why a hash and not a library (measured on a 128 × 128 cloth, 16,384 vertices and 32,258
-// triangles, float, AMD EPYC 2 cores, candidate generation only; see the report of the
-// self-collision branch):
+// Why this and not a library. Measured on a 128 × 128 cloth folded in half (16,384 vertices,
+// 32,258 triangles, layers 0.8 h apart, r = 0.5 h, h the spacing), float, best of 15, the
+// build included, on a 2-core VM shared with other builds (load ~2.5, so ±30%):
 //
-//   candidate pairs of                    this hash         nanoflann 1.4.3    Embree 3.13.5
-//                                          1 thr / 2 thr     kd-tree radius     rtcCollide
-//   vertices (points within 2r)           SEE_BELOW
-//   triangles (boxes inflated by r)       SEE_BELOW
+//   candidate pairs of                 this grid        nanoflann 1.4.3     Embree 3.13.5
+//                                      1 thr / 2 thr    kd-tree, radius     (user geometry)
+//   vertices within 2r (23k pairs)     4.6 / 4.3 ms     12.9 / 8.6 ms
+//   triangle boxes grown by r/2        10.0 / 4.4 ms                        rtcCollide
+//     (273k pairs)                                                          50 / 86 ms
+//   vertex vs triangle boxes           4.1 / 3.2 ms                         rtcPointQuery
+//     (130k pairs)                                                          35 / 13 ms
+//
+// (nanoflann radiusSearch in a TBB loop over the vertices; Embree with threads=T, its
+// rtcCollide callback collecting under a mutex, rtcPointQuery in a TBB loop.) The grid is
+// 2–3× faster than the kd-tree and 4–10× faster than Embree's BVH on this input, where every
+// box has about the same size, and adds no dependency. The first version, a hash of the cells
+// (27 bucket lookups per query instead of 9 runs), took 13 ms for the vertices.
 //
 // Deterministic: the candidate lists come out sorted by (query, box) for any thread count
 // (queries run in fixed chunks, each chunk's output concatenated in chunk order).

@@ -3,9 +3,12 @@
 #include <tessera/collision/spatial_hash.hpp>
 
 #include <algorithm>
+#include <cmath>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#include <tessera/core/error.hpp>
 
 #include "chunked_output.hpp"
 
@@ -17,12 +20,17 @@ void UniformGrid::build(std::span<const Aabb> boxes, Real cell_size) {
   largest_extent_ = 0;
   if (n > 0)
     for (int axis = 0; axis < 3; ++axis) lowest[axis] = highest[axis] = boxes[0].lo[axis];
+  bool finite = true;
   for (const Aabb& box : boxes)
     for (int axis = 0; axis < 3; ++axis) {
+      finite &= std::isfinite(box.lo[axis]) && std::isfinite(box.hi[axis]);
       lowest[axis] = std::min(lowest[axis], double(box.lo[axis]));
       highest[axis] = std::max(highest[axis], double(box.lo[axis]));
       largest_extent_ = std::max(largest_extent_, double(box.hi[axis]) - double(box.lo[axis]));
     }
+  // A NaN would make the cell count undefined (and a position that diverged is the
+  // solver's failure to report, not a grid to build).
+  if (!finite) throw InvalidInput("collision grid: a box has a coordinate that is not finite");
   // Points only (extent 0) get a cell from the span instead.
   cell_size_ = cell_size > 0 ? double(cell_size) : largest_extent_ * kCellPerExtent;
   const auto cells_at = [&](double size) {

@@ -139,6 +139,14 @@ TEST(SelfCollision, ContactsBecomeCompressionOnlyConstraintsAtTheThickness) {
   EXPECT_EQ(constraints.triangle_point.stretch_stiffness[0], Real(0));
 }
 
+TEST(SelfCollision, AMeshWithoutTrianglesHasNoContact) {
+  SelfCollision collision({}, 4);
+  Contacts contacts{{1, 2, 3, 4}, {5, 6, 7, 8}};  // stale lists are overwritten
+  collision.detect(triangle_and_point(Vector3r(0, 0, 0)), kSettings, contacts);
+  EXPECT_TRUE(contacts.triangle_point.empty());
+  EXPECT_TRUE(contacts.edge_edge.empty());
+}
+
 TEST(SelfCollision, InvalidInputIsRefused) {
   const std::vector<std::uint32_t> out_of_range = {0, 1, 7};
   EXPECT_THROW(SelfCollision(out_of_range, 4), InvalidInput);

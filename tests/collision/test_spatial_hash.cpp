@@ -4,12 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 #include <vector>
 
 #include <tbb/task_arena.h>
 
 #include <tessera/collision/spatial_hash.hpp>
+#include <tessera/core/error.hpp>
 
 namespace tessera {
 namespace {
@@ -102,6 +104,15 @@ TEST(UniformGrid, PointsOnlyAndEmptyInput) {
   grid.build({});
   grid.self_pairs(pairs);
   EXPECT_TRUE(pairs.empty());
+}
+
+TEST(UniformGrid, ANonFiniteBoxIsRefused) {
+  std::vector<Aabb> boxes = random_boxes(10, Real(0.1), 1);
+  boxes[4].hi[1] = std::numeric_limits<Real>::quiet_NaN();
+  UniformGrid grid;
+  EXPECT_THROW(grid.build(boxes), InvalidInput);
+  boxes[4].hi[1] = std::numeric_limits<Real>::infinity();
+  EXPECT_THROW(grid.build(boxes), InvalidInput);
 }
 
 TEST(UniformGrid, TheSamePairsOnOneAndTwoThreads) {

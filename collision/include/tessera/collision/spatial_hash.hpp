@@ -75,7 +75,8 @@ class UniformGrid {
   /// Rebuilds the grid over `boxes`, reusing its buffers. The cell is `cell_size`, or when 0
   /// kCellPerExtent × the largest box extent, grown if the boxes' span would need more than
   /// kCellsPerBox cells per box. Any cell size is correct (the query reaches back by the
-  /// largest extent, not by a cell); it only changes the speed. Boxes must be finite.
+  /// largest extent, not by a cell); it only changes the speed. Throws InvalidInput
+  /// for a box that is not finite (a NaN would leave the cell count undefined).
   void build(std::span<const Aabb> boxes, Real cell_size = 0);
 
   std::size_t size() const { return entry_index_.size(); }

@@ -1,0 +1,173 @@
+// Collision benchmarks, each on a 128 × 128 cloth (16,384 particles, 32,258 triangles,
+// 48,641 edges) folded in half over a cylinder of radius 0.4 h (h the spacing), its top
+// layer rippled by ±0.3 h so that it comes within reach of the bottom one in places, and
+// moving 0.05 h over the substep. Thickness 0.4 h, margin 0.1 h.
+//
+//   collision/self_detect/folded128/threads:<T>   SelfCollision::detect, the whole per-substep
+//       cost (boxes, two hash builds, both queries, narrow phase, output); counters
+//       triangle_point and edge_edge (contacts found)
+//   collision/self_detect_vertex_triangle/folded128/threads:<T>   the same without edge–edge
+//       contacts (SelfCollisionSettings::edge_edge = false)
+//   collision/broad_vertices/folded128/threads:<T>    the hash's candidate pairs of the vertices
+//       as points within 2r (r = thickness + margin): build + self_pairs
+//   collision/broad_triangles/folded128/threads:<T>   the same for the triangles' boxes grown by
+//       r/2: build + self_pairs
+//   collision/self_intersections/folded128/threads:<T>   count_self_intersections
+//   collision/reference/distance_sweep/cloth128/threads:<T>   one gs projection sweep of the
+//       128² distance cloth: the yardstick of the detection's budget (about two sweeps)
+//
+// Threads: 1 and 2, each run inside a tbb::task_arena of that many threads.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include <tbb/task_arena.h>
+
+#include <tessera/collision/self_collision.hpp>
+#include <tessera/collision/self_intersections.hpp>
+#include <tessera/collision/spatial_hash.hpp>
+#include <tessera/io/generators.hpp>
+#include <tessera/parallel/solver.hpp>
+
+#include "scenes.hpp"
+
+namespace {
+
+using namespace tessera;
+
+constexpr std::size_t kSide = 128;
+
+struct FoldedCloth {
+  io::ClothGrid grid;
+  ParticleState state;
+  Real spacing;
+
+  FoldedCloth() : grid(io::make_cloth_grid(kSide, kSide, Real(1) / Real(kSide - 1))) {
+    spacing = Real(1) / Real(kSide - 1);
+    const Real radius = Real(0.4) * spacing;
+    std::vector<Vector3r> positions;
+    for (const Vector3r& p : grid.positions) {
+      const Real along = p.x() - Real(0.5);
+      const Real angle = along / radius;
+      if (along <= 0) {
+        positions.emplace_back(p.x(), 0, p.y());
+      } else if (angle <= std::numbers::pi_v<Real>) {
+        positions.emplace_back(Real(0.5) + radius * std::sin(angle),
+                               radius - radius * std::cos(angle), p.y());
+      } else {
+        const Real x = Real(0.5) - (along - std::numbers::pi_v<Real> * radius);
+        const Real ripple =
+            Real(0.3) * spacing * std::sin(Real(37) * x) * std::cos(Real(23) * p.y());
+        positions.emplace_back(x, 2 * radius + ripple, p.y());
+      }
+    }
+    std::vector<Real> inverse_masses(positions.size(), 1);
+    inverse_masses[0] = inverse_masses[kSide - 1] = 0;
+    state = ParticleState(positions, inverse_masses);
+    for (std::size_t i = 0; i < state.size(); ++i) state.previous_y[i] += Real(0.05) * spacing;
+  }
+  SelfCollisionSettings settings() const { return {Real(0.4) * spacing, Real(0.1) * spacing}; }
+  Real reach() const { return settings().thickness + settings().margin; }
+};
+
+const FoldedCloth& folded() {
+  static const FoldedCloth cloth;
+  return cloth;
+}
+
+template <class Body>
+void in_arena(benchmark::State& state, Body&& body) {
+  tbb::task_arena(int(state.range(0))).execute(body);
+}
+
+void BM_SelfDetect(benchmark::State& state, bool edge_edge) {
+  const FoldedCloth& cloth = folded();
+  SelfCollisionSettings settings = cloth.settings();
+  settings.edge_edge = edge_edge;
+  in_arena(state, [&] {
+    SelfCollision collision(cloth.grid.triangle_indices, cloth.state.size());
+    SelfCollision::Contacts contacts;
+    collision.detect(cloth.state, settings, contacts);  // buffers at their size
+    for (auto _ : state) collision.detect(cloth.state, settings, contacts);
+    state.counters["triangle_point"] = double(contacts.triangle_point_count());
+    state.counters["edge_edge"] = double(contacts.edge_edge_count());
+  });
+}
+BENCHMARK_CAPTURE(BM_SelfDetect, all, true)->Name("collision/self_detect/folded128")
+    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_SelfDetect, vertex_triangle, false)
+    ->Name("collision/self_detect_vertex_triangle/folded128")->ArgName("threads")->Arg(1)->Arg(2)
+    ->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+void run_broad_phase(benchmark::State& state, const std::vector<Aabb>& boxes) {
+  in_arena(state, [&] {
+    UniformGrid grid;
+    std::vector<CandidatePair> pairs;
+    for (auto _ : state) {
+      grid.build(boxes);
+      grid.self_pairs(pairs);
+    }
+    state.counters["pairs"] = double(pairs.size());
+  });
+}
+
+void BM_BroadVertices(benchmark::State& state) {
+  const FoldedCloth& cloth = folded();
+  const Real half = cloth.reach();  // boxes of half-width r: pairs within 2r on each axis
+  std::vector<Aabb> boxes(cloth.state.size());
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const Vector3r p = cloth.state.position(i);
+    boxes[i] = {{p.x() - half, p.y() - half, p.z() - half}, {p.x() + half, p.y() + half, p.z() + half}};
+  }
+  run_broad_phase(state, boxes);
+}
+BENCHMARK(BM_BroadVertices)->Name("collision/broad_vertices/folded128")->ArgName("threads")
+    ->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+void BM_BroadTriangles(benchmark::State& state) {
+  const FoldedCloth& cloth = folded();
+  const auto& t = cloth.grid.triangle_indices;
+  std::vector<Aabb> boxes(cloth.grid.triangle_count());
+  for (std::size_t k = 0; k < boxes.size(); ++k) {
+    const Vector3r a = cloth.state.position(t[3 * k]), b = cloth.state.position(t[3 * k + 1]),
+                   c = cloth.state.position(t[3 * k + 2]);
+    const Vector3r lo = a.cwiseMin(b).cwiseMin(c).array() - cloth.reach() / 2;
+    const Vector3r hi = a.cwiseMax(b).cwiseMax(c).array() + cloth.reach() / 2;
+    boxes[k] = {{lo.x(), lo.y(), lo.z()}, {hi.x(), hi.y(), hi.z()}};
+  }
+  run_broad_phase(state, boxes);
+}
+BENCHMARK(BM_BroadTriangles)->Name("collision/broad_triangles/folded128")->ArgName("threads")
+    ->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+void BM_SelfIntersections(benchmark::State& state) {
+  const FoldedCloth& cloth = folded();
+  std::vector<Vector3r> positions(cloth.state.size());
+  for (std::size_t i = 0; i < positions.size(); ++i) positions[i] = cloth.state.position(i);
+  in_arena(state, [&] {
+    std::size_t count = 0;
+    for (auto _ : state)
+      benchmark::DoNotOptimize(count = count_self_intersections(positions, cloth.grid.triangle_indices));
+    state.counters["intersections"] = double(count);
+  });
+}
+BENCHMARK(BM_SelfIntersections)->Name("collision/self_intersections/folded128")
+    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+void BM_DistanceSweep(benchmark::State& state) {
+  static const Model model = test::cloth_model(kSide, kSide, test::ClothBending::none);
+  SolverSettings settings;
+  settings.threads = std::size_t(state.range(0));
+  settings.report_residuals = false;
+  settings.check_finite = false;
+  Solver solver = test::make_solver(model, settings);
+  solver.step();
+  for (auto _ : state) solver.project(1, settings.time_step);
+  state.SetItemsProcessed(state.iterations() * std::int64_t(model.constraints.size()));
+}
+BENCHMARK(BM_DistanceSweep)->Name("collision/reference/distance_sweep/cloth128")
+    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+}  // namespace

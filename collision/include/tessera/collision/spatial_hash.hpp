@@ -1,0 +1,159 @@
+// A uniform grid over axis-aligned boxes (a sorted-cell grid): the broad phase of
+// self-collision and of the self-intersection count.
+//
+//   build:  box i ──► cell of its lower corner, cells numbered x fastest, then y, then z
+//           counting sort by cell (stable: the entries of a cell in box order)
+//
+//     cell_start: [0 | 0 | 2 | 3 | 3 | ...]      entries: (box index, box) by cell, then index
+//                  c0  c1  c2  c3  c4
+//
+//   query box q: the cells from q.lo − E to q.hi on each axis (E the largest built extent);
+//   the cells x0..x1 of one (y, z) row are consecutive, so each row is one run of entries,
+//   and each entry whose box overlaps q is visited.
+//
+// Why the lower corner and E back: a box b overlapping q has q.lo − E ≤ b.lo ≤ q.hi on every
+// axis, so its lower corner lies in those cells, whatever the cell size; each box sits in
+// exactly one cell, so the build is one counting sort and no box is visited twice. The cell
+// (E/3 by default) only trades the runs' overhang against their count. The grid spans the
+// boxes' lower corners, at most kCellsPerBox cells per box (the cell grows if the boxes are
+// spread out), and a coordinate outside it is clamped to its border cell (monotone, so
+// nothing is missed): memory stays O(n) whatever the positions.
+//
+// Why this and not a library. Measured on a 128 × 128 cloth folded in half (16,384 vertices,
+// 32,258 triangles, layers 0.8 h apart, r = 0.5 h, h the spacing), float, best of 15, the
+// build included, on a 2-core VM shared with other builds (load ~2.5, so ±30%):
+//
+//   candidate pairs of                 this grid        nanoflann 1.4.3     Embree 3.13.5
+//                                      1 thr / 2 thr    kd-tree, radius     (user geometry)
+//   vertices within 2r (23k pairs)     4.6 / 4.3 ms     12.9 / 8.6 ms
+//   triangle boxes grown by r/2        10.0 / 4.4 ms                        rtcCollide
+//     (273k pairs)                                                          50 / 86 ms
+//   vertex vs triangle boxes           4.1 / 3.2 ms                         rtcPointQuery
+//     (130k pairs)                                                          35 / 13 ms
+//
+// (nanoflann radiusSearch in a TBB loop over the vertices; Embree with threads=T, its
+// rtcCollide callback collecting under a mutex, rtcPointQuery in a TBB loop.) The grid is
+// 2–3× faster than the kd-tree and 4–10× faster than Embree's BVH on this input, where every
+// box has about the same size, and adds no dependency. The first version, a hash of the cells
+// (27 bucket lookups per query instead of 9 runs), took 13 ms for the vertices.
+//
+// Deterministic: the candidate lists come out sorted by (query, box) for any thread count
+// (queries run in fixed chunks, each chunk's output concatenated in chunk order).
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <tessera/core/real.hpp>
+
+namespace tessera {
+
+/// An axis-aligned box: lo ≤ hi on each axis.
+struct Aabb {
+  Real lo[3];
+  Real hi[3];
+};
+
+inline bool overlap(const Aabb& a, const Aabb& b) {
+  return a.lo[0] <= b.hi[0] && b.lo[0] <= a.hi[0] && a.lo[1] <= b.hi[1] &&
+         b.lo[1] <= a.hi[1] && a.lo[2] <= b.hi[2] && b.lo[2] <= a.hi[2];
+}
+
+/// A candidate pair: query (or first box) and built box, ordered by (first, second).
+struct CandidatePair {
+  std::uint32_t first;
+  std::uint32_t second;
+  friend bool operator==(const CandidatePair&, const CandidatePair&) = default;
+  friend auto operator<=>(const CandidatePair&, const CandidatePair&) = default;
+};
+
+class UniformGrid {
+ public:
+  /// Rebuilds the grid over `boxes`, reusing its buffers. The cell is `cell_size`, or when 0
+  /// kCellPerExtent × the largest box extent, grown if the boxes' span would need more than
+  /// kCellsPerBox cells per box. Any cell size is correct (the query reaches back by the
+  /// largest extent, not by a cell); it only changes the speed. Throws InvalidInput
+  /// for a box that is not finite (a NaN would leave the cell count undefined).
+  void build(std::span<const Aabb> boxes, Real cell_size = 0);
+
+  std::size_t size() const { return entry_index_.size(); }
+  Real cell_size() const { return Real(cell_size_); }
+
+  /// Calls visit(i) once for every built box i overlapping `query`, in no fixed order.
+  template <class Visit>
+  void for_each_overlap(const Aabb& query, Visit&& visit) const {
+    scan(query, 0, visit);
+  }
+  /// The same for the boxes i > `index` only: a self query that keeps each pair once skips
+  /// the lower half before testing boxes.
+  template <class Visit>
+  void for_each_overlap_above(const Aabb& query, std::uint32_t index, Visit&& visit) const {
+    scan(query, index + 1, visit);
+  }
+
+  /// Every pair (i, j), i < j, of overlapping built boxes, sorted. Parallel (TBB), the same
+  /// for any thread count. `out` is overwritten.
+  void self_pairs(std::vector<CandidatePair>& out) const;
+  /// Every pair (q, i) of a query box q and a built box i that overlap, sorted.
+  void query_pairs(std::span<const Aabb> queries, std::vector<CandidatePair>& out) const;
+
+  /// At most this many cells per box (plus a few): the cell offsets stay O(n) in memory and
+  /// in the prefix sum, whatever the span of the boxes.
+  static constexpr std::size_t kCellsPerBox = 4;
+  /// Default cell: a third of the largest box extent. The query scans the cells from
+  /// query.lo − extent to query.hi, and finer cells trim what that range overhangs; below a
+  /// third the runs get short and their count grows (measured on the folded 128² cloth's
+  /// edges: cell/extent 1 → 0.5 → 0.33 → 0.25 took 40, 37, 28, 21 ms of edge scans under
+  /// load, and the vertex–triangle scans 6.2, 3.2, 2.5, 3.6 ms).
+  static constexpr double kCellPerExtent = 1.0 / 3.0;
+
+ private:
+  template <class Visit>
+  void scan(const Aabb& query, std::uint32_t lowest_index, Visit& visit) const;
+  /// Cell coordinate of v on `axis`, clamped to the grid (a monotone map, so a box below or
+  /// above the grid still meets every query that reaches that side). In double: a float
+  /// coordinate loses whole cells beyond 2^24 / cells.
+  std::int64_t cell_coordinate(double v, int axis) const {
+    const double c = std::floor((v - origin_[axis]) * inverse_cell_size_);
+    return c < 0 ? 0 : (c >= double(dims_[axis]) ? dims_[axis] - 1 : std::int64_t(c));
+  }
+
+  double cell_size_ = 1;
+  double inverse_cell_size_ = 1;
+  double largest_extent_ = 0;
+  double origin_[3] = {0, 0, 0};
+  std::int64_t dims_[3] = {1, 1, 1};
+  std::vector<std::uint32_t> cell_start_;  // cells + 1 offsets into the entries
+  std::vector<std::uint32_t> entry_index_;  // by cell (x fastest), then box index
+  std::vector<Aabb> entry_box_;
+  std::vector<std::uint32_t> cell_of_box_;  // build scratch
+};
+
+template <class Visit>
+void UniformGrid::scan(const Aabb& query, std::uint32_t lowest_index, Visit& visit) const {
+  if (entry_index_.empty()) return;
+  // A box overlapping the query has its lower corner in [query.lo - extent, query.hi]; the
+  // 1e-6 of a cell covers the rounding of that subtraction.
+  const double back = largest_extent_ + 1e-6 * cell_size_;
+  const std::int64_t x0 = cell_coordinate(double(query.lo[0]) - back, 0),
+                     x1 = cell_coordinate(query.hi[0], 0);
+  const std::int64_t y0 = cell_coordinate(double(query.lo[1]) - back, 1),
+                     y1 = cell_coordinate(query.hi[1], 1);
+  const std::int64_t z0 = cell_coordinate(double(query.lo[2]) - back, 2),
+                     z1 = cell_coordinate(query.hi[2], 2);
+  // The cells x0..x1 of one (y, z) row are consecutive, and so are their entries: one run.
+  for (std::int64_t cz = z0; cz <= z1; ++cz)
+    for (std::int64_t cy = y0; cy <= y1; ++cy) {
+      const std::size_t row = std::size_t((cz * dims_[1] + cy) * dims_[0]);
+      for (std::uint32_t e = cell_start_[row + std::size_t(x0)],
+                         end = cell_start_[row + std::size_t(x1) + 1];
+           e < end; ++e)
+        if (entry_index_[e] >= lowest_index && overlap(entry_box_[e], query))
+          visit(entry_index_[e]);
+    }
+}
+
+}  // namespace tessera

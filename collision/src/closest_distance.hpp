@@ -1,0 +1,75 @@
+// Squared distances between the primitives of a mesh, after Ericson, Real-Time Collision
+// Detection §5.1.5 (point–triangle, by Voronoi regions) and §5.1.9 (segment–segment). Only
+// the distance is needed (the kernels find their own closest points), so no sqrt here.
+#pragma once
+
+#include <algorithm>
+
+#include <tessera/core/real.hpp>
+
+namespace tessera::detail {
+
+inline Real squared_point_triangle_distance(const Vector3r& p, const Vector3r& a,
+                                            const Vector3r& b, const Vector3r& c) {
+  const Vector3r ab = b - a, ac = c - a, ap = p - a;
+  const Real d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return ap.squaredNorm();  // vertex a
+  const Vector3r bp = p - b;
+  const Real d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return bp.squaredNorm();  // vertex b
+  const Real vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {  // edge ab
+    const Real v = d1 / (d1 - d3);
+    return (ap - v * ab).squaredNorm();
+  }
+  const Vector3r cp = p - c;
+  const Real d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return cp.squaredNorm();  // vertex c
+  const Real vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {  // edge ac
+    const Real w = d2 / (d2 - d6);
+    return (ap - w * ac).squaredNorm();
+  }
+  const Real va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {  // edge bc
+    const Real w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return (bp - w * (c - b)).squaredNorm();
+  }
+  // Inside the face. A degenerate (zero-area) triangle never gets here: one of the edge or
+  // vertex regions above takes every point.
+  const Real denominator = va + vb + vc;
+  const Real v = vb / denominator, w = vc / denominator;
+  return (ap - v * ab - w * ac).squaredNorm();
+}
+
+inline Real squared_segment_distance(const Vector3r& p1, const Vector3r& q1, const Vector3r& p2,
+                                     const Vector3r& q2) {
+  const Vector3r d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+  const Real a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  const Real tiny = kDegenerateTolerance * kDegenerateTolerance;
+  Real s = 0, t = 0;
+  if (a <= tiny && e <= tiny) return r.squaredNorm();
+  if (a <= tiny) {
+    t = std::clamp(f / e, Real(0), Real(1));
+  } else {
+    const Real c = d1.dot(r);
+    if (e <= tiny) {
+      s = std::clamp(-c / a, Real(0), Real(1));
+    } else {
+      const Real b = d1.dot(d2), denominator = a * e - b * b;
+      // Parallel segments (denominator 0): any s works, take 0.
+      s = denominator > 0 ? std::clamp((b * f - c * e) / denominator, Real(0), Real(1)) : 0;
+      t = (b * s + f) / e;
+      if (t < 0) {
+        t = 0;
+        s = std::clamp(-c / a, Real(0), Real(1));
+      } else if (t > 1) {
+        t = 1;
+        s = std::clamp((b - c) / a, Real(0), Real(1));
+      }
+    }
+  }
+  return (p1 + s * d1 - (p2 + t * d2)).squaredNorm();
+}
+
+}  // namespace tessera::detail

@@ -1,0 +1,279 @@
+// Self-collision detection: known answers on one triangle and a vertex, on two edges, the
+// topology and static filters, a vertex that crosses a triangle within the substep, and on a
+// folded cloth the exact set a brute-force O(n²) loop finds with the same rule, listed the
+// same on 1 and 2 threads.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include <tbb/task_arena.h>
+
+#include <tessera/collision/self_collision.hpp>
+#include <tessera/core/error.hpp>
+#include <tessera/io/generators.hpp>
+
+#include "closest_distance.hpp"
+
+namespace tessera {
+namespace {
+
+using Contacts = SelfCollision::Contacts;
+
+constexpr Real kThickness = Real(0.1);
+const SelfCollisionSettings kSettings{kThickness, Real(0.02), Real(0.8)};
+
+/// One triangle (0, 1, 2) in the plane z = 0 and a particle 3 at `p` (all at rest).
+ParticleState triangle_and_point(const Vector3r& p, Real point_inverse_mass = 1) {
+  const std::vector<Vector3r> positions = {Vector3r(0, 0, 0), Vector3r(1, 0, 0),
+                                           Vector3r(0, 1, 0), p};
+  const std::vector<Real> inverse_masses = {1, 1, 1, point_inverse_mass};
+  return ParticleState(positions, inverse_masses);
+}
+
+/// The mesh of triangle_and_point: one triangle; particle 3 belongs to no triangle.
+const std::vector<std::uint32_t> kTriangleAndPoint = {0, 1, 2};
+
+Contacts detect(const std::vector<std::uint32_t>& triangles, const ParticleState& state,
+                const SelfCollisionSettings& settings = kSettings) {
+  SelfCollision collision(triangles, state.size());
+  Contacts contacts;
+  collision.detect(state, settings, contacts);
+  return contacts;
+}
+
+TEST(SelfCollision, AVertexJustAboveATriangleIsOneContact) {
+  const Contacts contacts =
+      detect(kTriangleAndPoint, triangle_and_point(Vector3r(Real(0.2), Real(0.2), Real(0.05))));
+  EXPECT_EQ(contacts.triangle_point, (std::vector<ParticleIndex>{3, 0, 1, 2}));
+  EXPECT_TRUE(contacts.edge_edge.empty());
+}
+
+TEST(SelfCollision, AVertexWithinTheMarginIsAContactOneBeyondItIsNot) {
+  // thickness + margin = 0.12.
+  EXPECT_EQ(detect(kTriangleAndPoint, triangle_and_point(Vector3r(Real(0.2), Real(0.2), Real(0.115))))
+                .triangle_point_count(),
+            1u);
+  EXPECT_EQ(detect(kTriangleAndPoint, triangle_and_point(Vector3r(Real(0.2), Real(0.2), Real(0.125))))
+                .triangle_point_count(),
+            0u);
+  // Beside the triangle, past its edge: the distance is to the edge, not to the plane.
+  EXPECT_EQ(detect(kTriangleAndPoint, triangle_and_point(Vector3r(Real(0.6), Real(0.6), Real(0))))
+                .triangle_point_count(),
+            0u);
+}
+
+TEST(SelfCollision, AFarVertexIsNoContact) {
+  EXPECT_EQ(detect(kTriangleAndPoint, triangle_and_point(Vector3r(3, 2, 1))).triangle_point_count(),
+            0u);
+}
+
+TEST(SelfCollision, ATriangleNeverTouchesItsOwnVerticesOrEdges) {
+  // With a thickness larger than the triangle, every vertex is "near" the triangle and every
+  // edge near the others: none of them is a contact.
+  const Contacts contacts = detect(kTriangleAndPoint, triangle_and_point(Vector3r(5, 5, 5)),
+                                   SelfCollisionSettings{Real(2), Real(0)});
+  EXPECT_TRUE(contacts.triangle_point.empty());
+  EXPECT_TRUE(contacts.edge_edge.empty());
+}
+
+TEST(SelfCollision, AdjacentEdgesAreNoContactCrossingEdgesAre) {
+  // Triangle (0, 1, 2) in z = 0 and a thin triangle (0, 3, 4) along the diagonal x = y,
+  // 0.05 above it at 3 and 4:
+  //
+  //    2                 edges, sorted: (0,1) (0,2) (0,3) (0,4) (1,2) (3,4)
+  //    |`.   3           the four through 0 meet there (distance 0) but are adjacent;
+  //    |  `.╱            (0,3) crosses (1,2) 0.025 above it, (3,4) crosses it 0.05 above;
+  //    | 4╱`.            (3,4) passes 0.2 from (0,1) and (0,2): out of reach (0.12).
+  //    0╱─────1
+  const std::vector<Vector3r> positions = {Vector3r(0, 0, 0), Vector3r(1, 0, 0),
+                                           Vector3r(0, 1, 0), Vector3r(1, 1, Real(0.05)),
+                                           Vector3r(Real(0.2), Real(0.2), Real(0.05))};
+  const std::vector<std::uint32_t> triangles = {0, 1, 2, 0, 3, 4};
+  const ParticleState state(positions, std::vector<Real>(5, 1));
+  const Contacts contacts = detect(triangles, state);
+  EXPECT_EQ(contacts.edge_edge, (std::vector<ParticleIndex>{0, 3, 1, 2, 1, 2, 3, 4}));
+  // Switched off, the edge–edge list is empty and the vertex–triangle one unchanged.
+  SelfCollisionSettings vertex_triangle_only = kSettings;
+  vertex_triangle_only.edge_edge = false;
+  const Contacts without = detect(triangles, state, vertex_triangle_only);
+  EXPECT_TRUE(without.edge_edge.empty());
+  EXPECT_EQ(without.triangle_point, contacts.triangle_point);
+  // Vertex 4 hovers 0.05 over triangle (0, 1, 2), whose corner it is not; vertex 3 is 0.7
+  // past its hypotenuse, and 1 and 2 are far from the thin triangle.
+  EXPECT_EQ(contacts.triangle_point, (std::vector<ParticleIndex>{4, 0, 1, 2}));
+}
+
+TEST(SelfCollision, StaticParticlesAloneMakeNoContact) {
+  ParticleState state = triangle_and_point(Vector3r(Real(0.2), Real(0.2), Real(0.05)), 0);
+  for (std::size_t i = 0; i < 3; ++i) state.inverse_mass[i] = 0;
+  EXPECT_EQ(detect(kTriangleAndPoint, state).triangle_point_count(), 0u);
+  // One movable particle is enough.
+  state.inverse_mass[1] = 1;
+  EXPECT_EQ(detect(kTriangleAndPoint, state).triangle_point_count(), 1u);
+}
+
+TEST(SelfCollision, AVertexCrossingATriangleWithinTheSubstepIsAContact) {
+  // From 0.3 above to 0.3 below in one substep: at neither end within reach (0.12), but the
+  // straight motion passes through the triangle.
+  ParticleState state = triangle_and_point(Vector3r(Real(0.2), Real(0.2), Real(-0.3)));
+  state.previous_z[3] = Real(0.3);
+  EXPECT_EQ(detect(kTriangleAndPoint, state).triangle_point, (std::vector<ParticleIndex>{3, 0, 1, 2}));
+  // The same motion far beside the triangle is no contact.
+  state.x[3] = state.previous_x[3] = 5;
+  EXPECT_EQ(detect(kTriangleAndPoint, state).triangle_point_count(), 0u);
+}
+
+TEST(SelfCollision, ContactsBecomeCompressionOnlyConstraintsAtTheThickness) {
+  const ParticleState state = triangle_and_point(Vector3r(Real(0.2), Real(0.2), Real(0.05)));
+  const Contacts contacts = detect(kTriangleAndPoint, state);
+  const SelfCollisionConstraints constraints =
+      make_self_collision_constraints(contacts, state.size(), kSettings);
+  ASSERT_EQ(constraints.triangle_point.size(), 1u);
+  EXPECT_EQ(constraints.edge_edge.size(), 0u);
+  EXPECT_EQ(constraints.triangle_point.particles.particle[0][0], 3u);
+  EXPECT_EQ(constraints.triangle_point.particles.particle[3][0], 2u);
+  EXPECT_EQ(constraints.triangle_point.rest_distance[0], kThickness);
+  EXPECT_EQ(constraints.triangle_point.compression_stiffness[0], kSettings.stiffness);
+  EXPECT_EQ(constraints.triangle_point.stretch_stiffness[0], Real(0));
+}
+
+TEST(SelfCollision, AMeshWithoutTrianglesHasNoContact) {
+  SelfCollision collision({}, 4);
+  Contacts contacts{{1, 2, 3, 4}, {5, 6, 7, 8}};  // stale lists are overwritten
+  collision.detect(triangle_and_point(Vector3r(0, 0, 0)), kSettings, contacts);
+  EXPECT_TRUE(contacts.triangle_point.empty());
+  EXPECT_TRUE(contacts.edge_edge.empty());
+}
+
+TEST(SelfCollision, InvalidInputIsRefused) {
+  const std::vector<std::uint32_t> out_of_range = {0, 1, 7};
+  EXPECT_THROW(SelfCollision(out_of_range, 4), InvalidInput);
+  const std::vector<std::uint32_t> repeated = {0, 1, 1};
+  EXPECT_THROW(SelfCollision(repeated, 4), InvalidInput);
+  const std::vector<std::uint32_t> ragged = {0, 1};
+  EXPECT_THROW(SelfCollision(ragged, 4), InvalidInput);
+  SelfCollision collision(kTriangleAndPoint, 4);
+  Contacts contacts;
+  const ParticleState state = triangle_and_point(Vector3r(0, 0, 1));
+  EXPECT_THROW(collision.detect(state, SelfCollisionSettings{0, 0}, contacts), InvalidInput);
+  EXPECT_THROW(collision.detect(state, SelfCollisionSettings{1, -1}, contacts), InvalidInput);
+  EXPECT_THROW(collision.detect(ParticleState(3), kSettings, contacts), InvalidInput);
+}
+
+// ------------------------------------------------------------------ a folded cloth
+
+/// An n × n cloth of spacing h folded in half over a cylinder of radius 0.4 h (layers 0.8 h
+/// apart), the top layer rippled by ±0.3 h so it comes within reach of the bottom in places,
+/// moving down by 0.05 h over the substep; two corners static.
+struct FoldedCloth {
+  io::ClothGrid grid;
+  ParticleState state;
+
+  explicit FoldedCloth(std::size_t n) : grid(io::make_cloth_grid(n, n, Real(1) / Real(n - 1))) {
+    const Real h = Real(1) / Real(n - 1), radius = Real(0.4) * h;
+    std::vector<Vector3r> positions;
+    for (const Vector3r& p : grid.positions) {
+      const Real along = p.x() - Real(0.5);
+      if (along <= 0) {
+        positions.emplace_back(p.x(), 0, p.y());
+        continue;
+      }
+      const Real angle = along / radius;
+      if (angle <= std::numbers::pi_v<Real>) {
+        positions.emplace_back(Real(0.5) + radius * std::sin(angle),
+                               radius - radius * std::cos(angle), p.y());
+        continue;
+      }
+      const Real x = Real(0.5) - (along - std::numbers::pi_v<Real> * radius);
+      const Real ripple = Real(0.3) * h * std::sin(Real(37) * x) * std::cos(Real(23) * p.y());
+      positions.emplace_back(x, 2 * radius + ripple, p.y());
+    }
+    std::vector<Real> inverse_masses(positions.size(), 1);
+    inverse_masses[0] = inverse_masses[n - 1] = 0;
+    state = ParticleState(positions, inverse_masses);
+    for (std::size_t i = 0; i < state.size(); ++i) state.previous_y[i] += Real(0.05) * h;
+  }
+  Real spacing() const { return Real(1) / Real(grid.columns - 1); }
+};
+
+/// The contact rule of self_collision.hpp over every pair, O(n²).
+Contacts brute_force(const FoldedCloth& cloth, const SelfCollision& collision, Real reach) {
+  const ParticleState& s = cloth.state;
+  const auto start = [&](std::uint32_t i) {
+    return Vector3r(s.previous_x[i], s.previous_y[i], s.previous_z[i]);
+  };
+  const auto motion = [&](std::uint32_t i) { return (s.position(i) - start(i)).norm(); };
+  const auto movable = [&](std::initializer_list<std::uint32_t> ids) {
+    for (const std::uint32_t i : ids)
+      if (s.inverse_mass[i] != 0) return true;
+    return false;
+  };
+  Contacts contacts;
+  const auto triangles = collision.triangles();
+  for (std::uint32_t p = 0; p < s.size(); ++p)
+    for (std::size_t t = 0; t < triangles.size() / 3; ++t) {
+      const std::uint32_t a = triangles[3 * t], b = triangles[3 * t + 1], c = triangles[3 * t + 2];
+      if (p == a || p == b || p == c || !movable({p, a, b, c})) continue;
+      const Real within = reach + motion(p) + std::max({motion(a), motion(b), motion(c)});
+      if (detail::squared_point_triangle_distance(start(p), start(a), start(b), start(c)) <
+          within * within)
+        contacts.triangle_point.insert(contacts.triangle_point.end(), {p, a, b, c});
+    }
+  const auto edges = collision.edges();
+  for (std::size_t e = 0; e < edges.size() / 2; ++e)
+    for (std::size_t f = e + 1; f < edges.size() / 2; ++f) {
+      const std::uint32_t p0 = edges[2 * e], p1 = edges[2 * e + 1], p2 = edges[2 * f],
+                          p3 = edges[2 * f + 1];
+      if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3 || !movable({p0, p1, p2, p3})) continue;
+      const Real within = reach + std::max(motion(p0), motion(p1)) + std::max(motion(p2), motion(p3));
+      if (detail::squared_segment_distance(start(p0), start(p1), start(p2), start(p3)) <
+          within * within)
+        contacts.edge_edge.insert(contacts.edge_edge.end(), {p0, p1, p2, p3});
+    }
+  return contacts;
+}
+
+TEST(SelfCollision, AFoldedClothHasExactlyTheBruteForceContacts) {
+  const FoldedCloth cloth(24);
+  SelfCollision collision(cloth.grid.triangle_indices, cloth.state.size());
+  const SelfCollisionSettings settings{Real(0.4) * cloth.spacing(), Real(0.1) * cloth.spacing()};
+  Contacts contacts;
+  collision.detect(cloth.state, settings, contacts);
+  const Contacts expected = brute_force(cloth, collision, settings.thickness + settings.margin);
+  EXPECT_GT(expected.triangle_point_count(), 20u);
+  EXPECT_GT(expected.edge_edge_count(), 20u);
+  EXPECT_EQ(contacts.triangle_point, expected.triangle_point);
+  EXPECT_EQ(contacts.edge_edge, expected.edge_edge);
+}
+
+TEST(SelfCollision, AFlatClothAtRestHasNoContact) {
+  const io::ClothGrid grid = io::make_cloth_grid(32, 32, Real(1) / 31);
+  const ParticleState state(grid.positions, std::vector<Real>(grid.vertex_count(), 1));
+  const Contacts contacts = detect(grid.triangle_indices, state,
+                                   SelfCollisionSettings{Real(0.4) / 31, Real(0.1) / 31});
+  EXPECT_EQ(contacts.triangle_point_count(), 0u);
+  EXPECT_EQ(contacts.edge_edge_count(), 0u);
+}
+
+TEST(SelfCollision, TheSameContactsOnOneAndTwoThreads) {
+  const FoldedCloth cloth(64);
+  const SelfCollisionSettings settings{Real(0.4) * cloth.spacing(), Real(0.1) * cloth.spacing()};
+  const auto contacts_on = [&](int threads) {
+    Contacts contacts;
+    tbb::task_arena(threads).execute([&] {
+      SelfCollision collision(cloth.grid.triangle_indices, cloth.state.size());
+      collision.detect(cloth.state, settings, contacts);
+      collision.detect(cloth.state, settings, contacts);  // buffers reused: same answer
+    });
+    return contacts;
+  };
+  const Contacts one = contacts_on(1), two = contacts_on(2);
+  EXPECT_GT(one.triangle_point_count(), 100u);
+  EXPECT_EQ(one.triangle_point, two.triangle_point);
+  EXPECT_EQ(one.edge_edge, two.edge_edge);
+}
+
+}  // namespace
+}  // namespace tessera

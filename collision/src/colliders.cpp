@@ -223,11 +223,21 @@ void find_collider_contacts(std::span<const Collider> colliders, const ParticleS
             if (misses_bounds(mesh_bounds[c], previous.cwiseMin(p), previous.cwiseMax(p), reach))
               continue;
             Vector3r entry_point, entry_normal;
-            if (mesh->first_entry(previous, p, entry_point, entry_normal)) {
-              emit(entry_normal, entry_point);
+            if (outside_bounds(mesh_bounds[c], p, reach)) {
+              if (mesh->first_entry(previous, p, entry_point, entry_normal))
+                emit(entry_normal, entry_point);
               continue;
             }
-            if (outside_bounds(mesh_bounds[c], p, reach)) continue;
+            // A crossing of the surface is within the segment's length of p, so the segment
+            // is only walked when p is no farther from the surface than that (rarely, for
+            // particles at rest).
+            const SurfaceQuery surface = mesh->closest_surface(p);
+            if (std::abs(surface.distance) <= (p - previous).norm() &&
+                mesh->first_entry(previous, p, entry_point, entry_normal))
+              emit(entry_normal, entry_point);
+            else if (surface.distance < reach)
+              emit(surface.normal, surface.point);
+            continue;
           }
           const SurfaceQuery surface = closest_surface(colliders[c], p);
           if (surface.distance < reach) emit(surface.normal, surface.point);

@@ -396,6 +396,27 @@ TEST(ColliderContacts, HitsWithinThicknessPlusMarginOnly) {
   EXPECT_EQ(hits.normals.size(), 0u);
 }
 
+TEST(ColliderContacts, MeshContactsAtRestOutsideNearAndInside) {
+  const std::vector<Collider> colliders = {collider_of(cube_mesh(1))};
+  const Real thickness = Real(0.05);
+  // At rest (previous = predicted): just outside within the thickness, far outside, deep
+  // inside (nearest face +y, 0.8 away), just inside the -x face.
+  const std::vector<Vector3r> positions = {{0, Real(1.03), 0}, {0, Real(1.5), 0},
+                                           {Real(0.1), Real(0.2), Real(0.05)},
+                                           {Real(-0.98), Real(0.5), Real(0.1)}};
+  const ParticleState state = state_of(positions, positions,
+                                       std::vector<Vector3r>(4, Vector3r::Zero()), {1, 1, 1, 1});
+  ColliderHits hits;
+  find_collider_contacts(colliders, state, thickness, 0, hits);
+  ASSERT_EQ(hits.particles, (std::vector<ParticleIndex>{0, 2, 3}));
+  expect_near(hits.normals[0], Vector3r::UnitY());
+  EXPECT_NEAR(hits.offsets[0], 1 + thickness, kTolerance);
+  expect_near(hits.normals[1], Vector3r::UnitY());
+  EXPECT_NEAR(hits.offsets[1], 1 + thickness, kTolerance);
+  expect_near(hits.normals[2], -Vector3r::UnitX());
+  EXPECT_NEAR(hits.offsets[2], 1 + thickness, kTolerance);
+}
+
 TEST(ColliderContacts, MeshTunnellingUsesTheEntrySide) {
   TestMesh slab = cube_mesh(1);
   for (auto& p : slab.positions) p.y() *= Real(0.01);

@@ -26,6 +26,13 @@ namespace tessera {
 namespace {
 
 constexpr std::size_t kLeafSize = 4;
+/// Surface-area splits may cut off few triangles at a time; below this depth the builder
+/// halves at the median instead, so the binary tree is at most kMaxSplitDepth + 32 deep (the
+/// 2^32 triangles of a ParticleIndex halved 32 times) and a walk's stack of kWalkStack entries
+/// (at most 3 per level, plus 4) can never overflow.
+constexpr std::uint32_t kMaxSplitDepth = 40;
+constexpr std::size_t kWalkStack = 256;
+static_assert(3 * (kMaxSplitDepth + 32) + 4 <= kWalkStack);
 /// A closest point whose barycentric coordinate is below this is on the edge (or vertex) it
 /// is next to: there the face normal alone could give the wrong sign, the pseudo-normal
 /// cannot (it blends the neighbour's normal in, never reverses).
@@ -134,10 +141,11 @@ struct MeshCollider::Data {
     return face_normal[t];
   }
 
-  /// Builds the node for leaf-ordered triangles [first, first + count) and its subtree.
+  /// Builds the node at `depth` for leaf-ordered triangles [first, first + count) and its
+  /// subtree.
   void build(std::vector<std::uint32_t>& order, const std::vector<Vector3r>& centroids,
              const std::vector<std::array<Vector3r, 3>>& input_corners, std::size_t node,
-             std::uint32_t first, std::uint32_t count) {
+             std::uint32_t first, std::uint32_t count, std::uint32_t depth) {
     Vector3r lower = Vector3r::Constant(std::numeric_limits<Real>::max());
     Vector3r upper = -lower;
     Vector3r centroid_lower = lower, centroid_upper = upper;
@@ -157,24 +165,25 @@ struct MeshCollider::Data {
       return;
     }
     const std::uint32_t half = split(order, centroids, input_corners, first, count,
-                                     centroid_lower, centroid_upper);
+                                     centroid_lower, centroid_upper, depth < kMaxSplitDepth);
     const std::size_t left = nodes.size();
     nodes.resize(left + 2);
     nodes[node].first = std::uint32_t(left);
     nodes[node].count = 0;
-    build(order, centroids, input_corners, left, first, half);
-    build(order, centroids, input_corners, left + 1, first + half, count - half);
+    build(order, centroids, input_corners, left, first, half, depth + 1);
+    build(order, centroids, input_corners, left + 1, first + half, count - half, depth + 1);
   }
 
   /// Reorders triangles [first, first + count) into two halves and returns the size of the
   /// first: the binned surface-area split (Wald 2007), which keeps boxes small and apart so a
   /// walk opens few of them, or the median along the longest axis when no split separates
-  /// the centroids.
+  /// the centroids or `by_area` is false.
   static std::uint32_t split(std::vector<std::uint32_t>& order,
                              const std::vector<Vector3r>& centroids,
                              const std::vector<std::array<Vector3r, 3>>& input_corners,
                              std::uint32_t first, std::uint32_t count,
-                             const Vector3r& centroid_lower, const Vector3r& centroid_upper) {
+                             const Vector3r& centroid_lower, const Vector3r& centroid_upper,
+                             bool by_area) {
     constexpr int kBins = 16;
     struct Bin {
       Vector3r lower = Vector3r::Constant(std::numeric_limits<Real>::max());
@@ -198,7 +207,7 @@ struct MeshCollider::Data {
     };
     Real best_cost = std::numeric_limits<Real>::infinity();
     int best_axis = -1, best_bin = 0;
-    for (int axis = 0; axis < 3; ++axis) {
+    for (int axis = 0; axis < 3 && by_area; ++axis) {
       if (!(centroid_upper[axis] > centroid_lower[axis])) continue;
       std::array<Bin, kBins> bins;
       for (std::uint32_t i = first; i < first + count; ++i) {
@@ -373,7 +382,7 @@ MeshCollider::MeshCollider(std::span<const Vector3r> positions,
   }
   data->nodes.reserve(2 * count);
   data->nodes.resize(1);
-  data->build(order, centroids, input_corners, 0, 0, std::uint32_t(count));
+  data->build(order, centroids, input_corners, 0, 0, std::uint32_t(count), 0);
   data->bounds = {data->nodes[0].lower, data->nodes[0].upper};
   data->wide.reserve(data->nodes.size() / 2 + 1);
   data->collapse(0);
@@ -414,15 +423,13 @@ SurfaceQuery MeshCollider::closest_surface(const Vector3r& p) const {
   std::size_t best_triangle = 0;
   TrianglePoint best{};
   // Nodes and leaves to visit with their box's squared distance, so one the bound has passed
-  // since it was pushed is dropped without testing its box again. A visit pushes at most 4
-  // entries and the binary tree's depth is at most log2(count) + 1 ≤ 64, so 256 entries are
-  // enough for any mesh that fits in memory.
+  // since it was pushed is dropped without testing its box again (kWalkStack is enough).
   struct Pending {
     std::uint32_t index;
     std::uint32_t count;  // 0: a wide node, else a leaf's triangle count
     Real squared_distance;
   };
-  Pending stack[256];
+  Pending stack[kWalkStack];
   int top = 0;
   stack[top++] = {0, 0, 0};
   while (top > 0) {
@@ -501,7 +508,7 @@ bool MeshCollider::first_entry(const Vector3r& from, const Vector3r& to, Vector3
     std::uint32_t index;
     std::uint32_t count;
   };
-  Pending stack[256];
+  Pending stack[kWalkStack];
   int top = 0;
   stack[top++] = {0, 0};
   while (top > 0) {

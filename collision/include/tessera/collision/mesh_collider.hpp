@@ -83,9 +83,8 @@ class MeshCollider {
   bool first_entry(const Vector3r& from, const Vector3r& to, Vector3r& point,
                    Vector3r& normal) const;
 
-  struct Data;
-
  private:
+  struct Data;
   std::shared_ptr<const Data> data_;
 };
 

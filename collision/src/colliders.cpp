@@ -200,7 +200,8 @@ void find_collider_contacts(std::span<const Collider> colliders, const ParticleS
   std::vector<Bounds3>& mesh_bounds = out.mesh_bounds;
   mesh_bounds.resize(colliders.size());
   for (std::size_t c = 0; c < colliders.size(); ++c)
-    if (const auto* mesh = std::get_if<MeshCollider>(&colliders[c])) mesh_bounds[c] = mesh->bounds();
+    if (const auto* mesh = std::get_if<MeshCollider>(&colliders[c]))
+      mesh_bounds[c] = mesh->bounds();
 
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunk_count, 1), [&](const auto& range) {
     for (std::size_t chunk = range.begin(); chunk != range.end(); ++chunk) {
@@ -229,8 +230,8 @@ void find_collider_contacts(std::span<const Collider> colliders, const ParticleS
               continue;
             }
             // A crossing of the surface is within the segment's length of p, so the segment
-            // is only walked when p is no farther from the surface than that (rarely, for
-            // particles at rest).
+            // is only walked when p is no farther from the surface than that: particles at
+            // rest, which move less than their distance to the surface, skip the walk.
             const SurfaceQuery surface = mesh->closest_surface(p);
             if (std::abs(surface.distance) <= (p - previous).norm() &&
                 mesh->first_entry(previous, p, entry_point, entry_normal))

@@ -26,7 +26,7 @@ namespace tessera {
 namespace {
 
 constexpr std::size_t kLeafSize = 4;
-/// Surface-area splits may cut off few triangles at a time; below this depth the builder
+/// Surface-area splits may cut off few triangles at a time; from this depth on the builder
 /// halves at the median instead, so the binary tree is at most kMaxSplitDepth + 32 deep (the
 /// 2^32 triangles of a ParticleIndex halved 32 times) and a walk's stack of kWalkStack entries
 /// (at most 3 per level, plus 4) can never overflow.

@@ -5,15 +5,16 @@
 // a closest-point-on-triangle callback): measured on a UV sphere of 10,080 triangles with
 // 16,384 query points (release, float, one thread, x86-64 baseline build, best of 21 runs
 // interleaved, on a 2-core VM shared with other builds):
-//   points in the shell 0.8 < r < 1.2:     this BVH 2.4-2.9 µs/query, Embree 1.9-2.2 (1.3-1.4x)
-//   points near the surface 0.97-1.03:     this BVH 1.0-1.5 µs/query, Embree 0.7-1.0 (1.4-1.5x)
-//   build:                                 this BVH 16-29 ms, Embree 4-6 ms
+//                             this BVH          Embree         Embree faster by
+//   shell 0.8 < r < 1.2       2.4-2.9 µs/query  1.9-2.2 µs     1.2-1.4x
+//   near surface, 0.97-1.03   1.0-1.5 µs/query  0.7-1.0 µs     1.3-1.5x
+//   build                     16-29 ms          4-6 ms
 //   largest distance difference 9e-7 (both exact to float rounding).
 // This BVH's times include the sign (feature and pseudo-normal), Embree's do not: with Embree
-// that cost would come on top. Embree is faster, but not by enough to take a dependency that is float-only (the
-// double build would round every query), runs its own thread pool and ISA dispatch, and would
-// still need the feature and pseudo-normal code here. What would close the gap: testing a
-// leaf's four triangles at once in SIMD lanes.
+// that cost would come on top. Embree is faster, but not by enough to take a dependency that
+// is float-only (the double build would round every query), runs its own thread pool and ISA
+// dispatch, and would still need the feature and pseudo-normal code here. What would close
+// the gap: testing a leaf's four triangles at once in SIMD lanes.
 //
 // Sign. Outside is the side a triangle's normal points to, the normal of counter-clockwise
 // corners (a, b, c) being (b - a) × (c - a). The sign of a point p with closest surface point

@@ -301,11 +301,20 @@ TEST(MeshCollider, IcosphereMatchesTheSphereWithinItsChordError) {
     }
     if (p.norm() > Real(0.2)) expect_near(actual.normal, expected.normal, Real(0.2));
   }
-  // Exactly at a vertex and just outside and inside it, along the vertex's radius.
-  const Vector3r vertex = ico.positions[0];
-  EXPECT_NEAR(mesh.closest_surface(vertex).distance, 0, kTolerance);
-  EXPECT_GT(mesh.closest_surface(Real(1.001) * vertex).distance, 0);
-  EXPECT_LT(mesh.closest_surface(Real(0.999) * vertex).distance, 0);
+  // Exactly on every vertex and edge midpoint, and just outside and inside them along the
+  // radius, where the closest feature is a vertex or an edge: the pseudo-normals' cases.
+  for (std::size_t t = 0; t < ico.triangles.size(); t += 3)
+    for (int k = 0; k < 3; ++k) {
+      const Vector3r& a = ico.positions[ico.triangles[t + k]];
+      const Vector3r& b = ico.positions[ico.triangles[t + (k + 1) % 3]];
+      for (const Vector3r& on : {a, Vector3r((a + b) / 2)}) {
+        ASSERT_NEAR(mesh.closest_surface(on).distance, 0, kTolerance);
+        ASSERT_NEAR(mesh.closest_surface(Real(1.001) * on).distance, Real(0.001) * on.norm(),
+                    kTolerance);
+        ASSERT_NEAR(mesh.closest_surface(Real(0.999) * on).distance, Real(-0.001) * on.norm(),
+                    10 * kTolerance);
+      }
+    }
 }
 
 TEST(MeshCollider, ClosestTriangleMatchesBruteForce) {

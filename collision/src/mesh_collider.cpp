@@ -339,7 +339,7 @@ MeshCollider::MeshCollider(std::span<const Vector3r> positions,
     const Vector3r cross = (b - a).cross(c - a);
     const Real longest_squared =
         std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
-    const Real area2 = cross.norm();
+    const Real area2 = cross.stableNorm();  // no underflow for triangles of 1e-10 and below
     if (!(area2 > kDegenerateTolerance * longest_squared))
       throw InvalidInput(triangle_name(t) + " is degenerate: its corners (vertices " +
                          std::to_string(v[0]) + ", " + std::to_string(v[1]) + ", " +

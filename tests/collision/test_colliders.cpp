@@ -10,6 +10,7 @@
 #include <map>
 #include <numbers>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@
 
 #include <tessera/collision/colliders.hpp>
 #include <tessera/core/error.hpp>
+#include <tessera/io/mesh_readers.hpp>
 
 namespace tessera {
 namespace {
@@ -299,11 +301,21 @@ TEST(MeshCollider, IcosphereMatchesTheSphereWithinItsChordError) {
     }
     if (p.norm() > Real(0.2)) expect_near(actual.normal, expected.normal, Real(0.2));
   }
-  // Exactly at a vertex and just outside and inside it, along the vertex's radius.
-  const Vector3r vertex = ico.positions[0];
-  EXPECT_NEAR(mesh.closest_surface(vertex).distance, 0, kTolerance);
-  EXPECT_GT(mesh.closest_surface(Real(1.001) * vertex).distance, 0);
-  EXPECT_LT(mesh.closest_surface(Real(0.999) * vertex).distance, 0);
+  // Exactly on every vertex and edge midpoint, and just outside and inside them along the
+  // radius, where the closest feature is a vertex or an edge: the pseudo-normals' cases.
+  for (std::size_t t = 0; t < ico.triangles.size(); t += 3)
+    for (int k = 0; k < 3; ++k) {
+      const Vector3r& a = ico.positions[ico.triangles[t + k]];
+      const Vector3r& b = ico.positions[ico.triangles[t + (k + 1) % 3]];
+      for (const Vector3r& on : {a, Vector3r((a + b) / 2)}) {
+        ASSERT_NEAR(mesh.closest_surface(on).distance, 0, kTolerance);
+        ASSERT_NEAR(mesh.closest_surface(Real(1.001) * on).distance, Real(0.001) * on.norm(),
+                    kTolerance);
+        // Inside, an adjacent face is nearer than the vertex by 0.001 (1 - cos(its tilt)).
+        ASSERT_NEAR(mesh.closest_surface(Real(0.999) * on).distance, Real(-0.001) * on.norm(),
+                    Real(5e-6) + kTolerance);
+      }
+    }
 }
 
 TEST(MeshCollider, ClosestTriangleMatchesBruteForce) {
@@ -331,6 +343,52 @@ TEST(MeshCollider, OpenSheetSignFollowsTheWinding) {
   const SurfaceQuery above = sheet.closest_surface(Vector3r(0, std::numbers::pi_v<Real> / 2, 1));
   EXPECT_NEAR(above.distance, 1, 1e-2);
   expect_near(above.normal, Vector3r::UnitZ(), 5e-2);
+}
+
+TEST(MeshCollider, TakesWhatTheObjReaderGives) {
+  // A unit tetrahedron, faces wound outward, as a file would hold it (quads are fanned).
+  std::istringstream obj(
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+      "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  const io::Mesh file = io::read_obj(obj, "tet.obj");
+  const MeshCollider tet(file.positions, file.triangles);
+  EXPECT_TRUE(tet.closed());
+  const SurfaceQuery inside = tet.closest_surface(Vector3r(Real(0.1), Real(0.2), Real(0.3)));
+  EXPECT_NEAR(inside.distance, Real(-0.1), kTolerance);
+  expect_near(inside.normal, -Vector3r::UnitX());
+  // Beyond the slanted face x + y + z = 1, and beyond the corner at the origin.
+  const SurfaceQuery beyond = tet.closest_surface(Vector3r(1, 1, 1));
+  EXPECT_NEAR(beyond.distance, 2 / std::sqrt(Real(3)), kTolerance);
+  expect_near(beyond.normal, Vector3r::Ones().normalized());
+  EXPECT_NEAR(tet.closest_surface(Vector3r(-1, -1, -1)).distance, std::sqrt(Real(3)), kTolerance);
+}
+
+TEST(MeshCollider, UnevenTrianglesStayExact) {
+  // 3000 triangles whose sizes shrink geometrically (by 10^4 in all) along x: uneven boxes and
+  // uneven surface-area splits.
+  TestMesh strip;
+  Real x = 0;
+  for (int t = 0; t < 3000; ++t) {
+    const Real size = Real(10) * std::pow(Real(0.997), Real(t));
+    const ParticleIndex first = ParticleIndex(strip.positions.size());
+    strip.positions.insert(strip.positions.end(),
+                           {Vector3r(x, 0, 0), Vector3r(x + size, 0, 0), Vector3r(x, size, 0)});
+    strip.triangles.insert(strip.triangles.end(), {first, first + 1, first + 2});
+    x += size;
+  }
+  const MeshCollider mesh = collider_of(strip);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<Real> along(0, x), up(-1, 5);
+  for (int k = 0; k < 300; ++k) {
+    const Vector3r p(along(rng), up(rng), up(rng));
+    Real nearest = std::numeric_limits<Real>::max();
+    for (std::size_t t = 0; t < strip.triangles.size(); t += 3)
+      nearest = std::min(nearest, reference_distance(p, strip.positions[strip.triangles[t]],
+                                                     strip.positions[strip.triangles[t + 1]],
+                                                     strip.positions[strip.triangles[t + 2]]));
+    ASSERT_NEAR(std::abs(mesh.closest_surface(p).distance), nearest, 1e-4 * (1 + nearest))
+        << "at " << p.transpose();
+  }
 }
 
 TEST(MeshCollider, FirstEntryThroughAThinWall) {

@@ -423,7 +423,8 @@ py::dict family_arrays(const Batch& batch) {
   }
   std::apply(
       [&](const auto&... parameter) {
-        auto one = [&](const auto& p) {
+        // Unused for the contact families, whose parameter lists are empty.
+        [[maybe_unused]] auto one = [&](const auto& p) {
           using P = std::decay_t<decltype(p)>;
           if constexpr (std::is_same_v<P, RealParameter<Input, Batch>>) {
             if (p.values)
@@ -450,7 +451,8 @@ py::list family_table() {
     py::dict parameters;
     std::apply(
         [&](const auto&... parameter) {
-          auto one = [&](const auto& p) {
+          // Unused for the contact families, whose parameter lists are empty.
+          [[maybe_unused]] auto one = [&](const auto& p) {
             using P = std::decay_t<decltype(p)>;
             if constexpr (std::is_same_v<P, RealParameter<Input, Batch>>)
               parameters[p.name] = p.per_constraint ? "number or per-constraint array" : "number";

@@ -1,5 +1,5 @@
-// The spatial hash's build (a counting sort of the boxes by bucket) and its pair queries
-// (the picture is in spatial_hash.hpp).
+// The uniform grid's build (a counting sort of the boxes by cell) and its pair queries (the
+// picture is in spatial_hash.hpp).
 #include <tessera/collision/spatial_hash.hpp>
 
 #include <algorithm>

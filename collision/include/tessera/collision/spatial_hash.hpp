@@ -22,21 +22,22 @@
 //
 // Why this and not a library. Measured on a 128 × 128 cloth folded in half (16,384 vertices,
 // 32,258 triangles, layers 0.8 h apart, r = 0.5 h, h the spacing), float, best of 15, the
-// build included, on a 2-core VM shared with other builds (load ~2.5, so ±30%):
+// build included, on an idle 2-core Xeon VM:
 //
 //   candidate pairs of                 this grid        nanoflann 1.4.3     Embree 3.13.5
 //                                      1 thr / 2 thr    kd-tree, radius     (user geometry)
-//   vertices within 2r (23k pairs)     4.6 / 4.3 ms     12.9 / 8.6 ms
-//   triangle boxes grown by r/2        10.0 / 4.4 ms                        rtcCollide
-//     (273k pairs)                                                          50 / 86 ms
-//   vertex vs triangle boxes           4.1 / 3.2 ms                         rtcPointQuery
-//     (130k pairs)                                                          35 / 13 ms
+//   vertices within 2r (23k pairs)     3.7 / 2.3 ms     10.3 / 7.7 ms
+//   triangle boxes grown by r/2        9.5 / 4.2 ms                         rtcCollide
+//     (273k pairs)                                                          41 / 95 ms
+//   vertex vs triangle boxes           3.1 / 1.9 ms                         rtcPointQuery
+//     (130k pairs)                                                          27 / 14 ms
 //
 // (nanoflann radiusSearch in a TBB loop over the vertices; Embree with threads=T, its
 // rtcCollide callback collecting under a mutex, rtcPointQuery in a TBB loop.) The grid is
-// 2–3× faster than the kd-tree and 4–10× faster than Embree's BVH on this input, where every
+// ~3× faster than the kd-tree and 4–20× faster than Embree's BVH on this input, where every
 // box has about the same size, and adds no dependency. The first version, a hash of the cells
-// (27 bucket lookups per query instead of 9 runs), took 13 ms for the vertices.
+// (27 bucket lookups per query instead of 9 runs), took 13 ms for the vertices where this
+// grid took 3.6 (the same loaded run).
 //
 // Deterministic: the candidate lists come out sorted by (query, box) for any thread count
 // (queries run in fixed chunks, each chunk's output concatenated in chunk order).

@@ -4,11 +4,11 @@
 // moving 0.05 h over the substep. Thickness 0.4 h, margin 0.1 h.
 //
 //   collision/self_detect/folded128/threads:<T>   SelfCollision::detect, the whole per-substep
-//       cost (boxes, two hash builds, both queries, narrow phase, output); counters
+//       cost (boxes, two grid builds, both queries, narrow phase, output); counters
 //       triangle_point and edge_edge (contacts found)
 //   collision/self_detect_vertex_triangle/folded128/threads:<T>   the same without edge–edge
 //       contacts (SelfCollisionSettings::edge_edge = false)
-//   collision/broad_vertices/folded128/threads:<T>    the hash's candidate pairs of the vertices
+//   collision/broad_vertices/folded128/threads:<T>    the grid's candidate pairs of the vertices
 //       as points within 2r (r = thickness + margin): build + self_pairs
 //   collision/broad_triangles/folded128/threads:<T>   the same for the triangles' boxes grown by
 //       r/2: build + self_pairs

@@ -3,9 +3,9 @@
 //
 //   reach_boxes        each particle's motion; the boxes of vertices, triangles and edges
 //                      at the start, grown by their motion and by r (vertices), r/2 (edges)
-//   hash               the triangles and the edges in a spatial hash each
-//   vertex–triangle    each vertex queries the triangle hash; topology, statics, distance
-//   edge–edge          each edge queries the edge hash for higher edges; same filters
+//   grids              the triangles and the edges in a uniform grid each
+//   vertex–triangle    each vertex queries the triangle grid; topology, statics, distance
+//   edge–edge          each edge queries the edge grid for higher edges; same filters
 //
 // Both contact lists come out of chunked loops (chunked_output.hpp): sorted by key, whatever
 // the thread count.
@@ -142,7 +142,7 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
   // Boxes: the start positions grown by the motion and the reach, the vertex's by all of
   // the reach and an edge's by half. A pair that meets the contact rule (distance at the
   // start below reach + the two motions) has overlapping boxes, since no coordinate differs
-  // by more than the distance; so the hash misses no contact, and the boxes hold the swept
+  // by more than the distance; so the grid misses no contact, and the boxes hold the swept
   // motion as well.
   motion_.resize(particle_count_);
   parallel_over(particle_count_, [&](std::size_t i) {

@@ -1,5 +1,5 @@
-// The spatial hash's build (a counting sort of the boxes by bucket) and its pair queries
-// (the picture is in spatial_hash.hpp).
+// The uniform grid's build (a counting sort of the boxes by cell) and its pair queries (the
+// picture is in spatial_hash.hpp).
 #include <tessera/collision/spatial_hash.hpp>
 
 #include <algorithm>
@@ -17,7 +17,7 @@ namespace tessera {
 void UniformGrid::build(std::span<const Aabb> boxes, Real cell_size) {
   const std::size_t n = boxes.size();
   double lowest[3] = {0, 0, 0}, highest[3] = {0, 0, 0};  // of the lower corners
-  largest_extent_ = 0;
+  for (double& extent : largest_extent_) extent = 0;
   if (n > 0)
     for (int axis = 0; axis < 3; ++axis) lowest[axis] = highest[axis] = boxes[0].lo[axis];
   bool finite = true;
@@ -26,13 +26,15 @@ void UniformGrid::build(std::span<const Aabb> boxes, Real cell_size) {
       finite &= std::isfinite(box.lo[axis]) && std::isfinite(box.hi[axis]);
       lowest[axis] = std::min(lowest[axis], double(box.lo[axis]));
       highest[axis] = std::max(highest[axis], double(box.lo[axis]));
-      largest_extent_ = std::max(largest_extent_, double(box.hi[axis]) - double(box.lo[axis]));
+      largest_extent_[axis] =
+          std::max(largest_extent_[axis], double(box.hi[axis]) - double(box.lo[axis]));
     }
   // A NaN would make the cell count undefined (and a position that diverged is the
   // solver's failure to report, not a grid to build).
   if (!finite) throw InvalidInput("collision grid: a box has a coordinate that is not finite");
   // Points only (extent 0) get a cell from the span instead.
-  cell_size_ = cell_size > 0 ? double(cell_size) : largest_extent_ * kCellPerExtent;
+  const double largest = std::max({largest_extent_[0], largest_extent_[1], largest_extent_[2]});
+  cell_size_ = cell_size > 0 ? double(cell_size) : largest * kCellPerExtent;
   const auto cells_at = [&](double size) {
     double cells = 1;
     for (int axis = 0; axis < 3; ++axis)

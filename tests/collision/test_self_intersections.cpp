@@ -1,7 +1,7 @@
 // The self-intersection count: known answers on pairs of triangles (crossing, apart, coplanar
 // overlapping and apart, touching, degenerate), symmetry of the pair test under swapping and
 // rotating the corners, and on meshes: a flat grid counts 0, a grid folded through itself
-// counts more than 0, and the hashed count equals the O(n²) count on a crumpled grid.
+// counts more than 0, and the grid-culled count equals the O(n²) count on a crumpled grid.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -93,7 +93,7 @@ TEST(SelfIntersections, AGridFoldedThroughItselfCountsMoreThanZero) {
   EXPECT_GT(count(grid.positions, grid.triangle_indices), 0u);
 }
 
-TEST(SelfIntersections, TheHashedCountEqualsTheQuadraticCount) {
+TEST(SelfIntersections, TheCulledCountEqualsTheQuadraticCount) {
   io::ClothGrid grid = io::make_cloth_grid(20, 20, Real(1) / 19);
   std::mt19937 random(9);
   std::uniform_real_distribution<Real> noise(-Real(0.06), Real(0.06));

@@ -13,7 +13,7 @@
 // and 0 counts as touching: the count can only err towards reporting an intersection, never
 // towards missing one, so a drape counted at 0 is clean.
 //
-// Only pairs whose boxes overlap are tested (spatial_hash.hpp): O(n) on a cloth, not O(n²).
+// Only pairs whose boxes overlap are tested (the grid of spatial_hash.hpp): O(n) on a cloth, not O(n²).
 #pragma once
 
 #include <cstddef>

@@ -7,35 +7,37 @@
 //     cell_start: [0 | 0 | 2 | 3 | 3 | ...]      entries: (box index, box) by cell, then index
 //                  c0  c1  c2  c3  c4
 //
-//   query box q: the cells from q.lo − E to q.hi on each axis (E the largest built extent);
-//   the cells x0..x1 of one (y, z) row are consecutive, so each row is one run of entries,
-//   and each entry whose box overlaps q is visited.
+//   query box q: the cells from q.lo − E to q.hi on each axis (E the largest built extent
+//   along it); the cells x0..x1 of one (y, z) row are consecutive, so each row is one run
+//   of entries, and each entry whose box overlaps q is visited.
 //
 // Why the lower corner and E back: a box b overlapping q has q.lo − E ≤ b.lo ≤ q.hi on every
-// axis, so its lower corner lies in those cells, whatever the cell size; each box sits in
-// exactly one cell, so the build is one counting sort and no box is visited twice. The cell
-// (E/3 by default) only trades the runs' overhang against their count. The grid spans the
-// boxes' lower corners, at most kCellsPerBox cells per box (the cell grows if the boxes are
-// spread out), and a coordinate outside it is clamped to its border cell (monotone, so
-// nothing is missed): memory stays O(n) whatever the positions.
+// axis (E the largest extent along that axis: a flat cloth's boxes are thin across it), so
+// its lower corner lies in those cells, whatever the cell size; each box sits in exactly one
+// cell, so the build is one counting sort and no box is visited twice. The cell (a third of
+// the largest extent by default) only trades the runs' overhang against their count. The
+// grid spans the boxes' lower corners, at most kCellsPerBox cells per box (the cell grows if
+// the boxes are spread out), and a coordinate outside it is clamped to its border cell
+// (monotone, so nothing is missed): memory stays O(n) whatever the positions.
 //
 // Why this and not a library. Measured on a 128 × 128 cloth folded in half (16,384 vertices,
 // 32,258 triangles, layers 0.8 h apart, r = 0.5 h, h the spacing), float, best of 15, the
-// build included, on a 2-core VM shared with other builds (load ~2.5, so ±30%):
+// build included, on an idle 2-core Xeon VM:
 //
 //   candidate pairs of                 this grid        nanoflann 1.4.3     Embree 3.13.5
 //                                      1 thr / 2 thr    kd-tree, radius     (user geometry)
-//   vertices within 2r (23k pairs)     4.6 / 4.3 ms     12.9 / 8.6 ms
-//   triangle boxes grown by r/2        10.0 / 4.4 ms                        rtcCollide
-//     (273k pairs)                                                          50 / 86 ms
-//   vertex vs triangle boxes           4.1 / 3.2 ms                         rtcPointQuery
-//     (130k pairs)                                                          35 / 13 ms
+//   vertices within 2r (23k pairs)     3.7 / 2.3 ms     10.3 / 7.7 ms
+//   triangle boxes grown by r/2        9.5 / 4.2 ms                         rtcCollide
+//     (273k pairs)                                                          41 / 95 ms
+//   vertex vs triangle boxes           3.1 / 1.9 ms                         rtcPointQuery
+//     (130k pairs)                                                          27 / 14 ms
 //
 // (nanoflann radiusSearch in a TBB loop over the vertices; Embree with threads=T, its
 // rtcCollide callback collecting under a mutex, rtcPointQuery in a TBB loop.) The grid is
-// 2–3× faster than the kd-tree and 4–10× faster than Embree's BVH on this input, where every
+// ~3× faster than the kd-tree and 4–20× faster than Embree's BVH on this input, where every
 // box has about the same size, and adds no dependency. The first version, a hash of the cells
-// (27 bucket lookups per query instead of 9 runs), took 13 ms for the vertices.
+// (27 bucket lookups per query instead of 9 runs), took 13 ms for the vertices where this
+// grid took 3.6 (the same loaded run).
 //
 // Deterministic: the candidate lists come out sorted by (query, box) for any thread count
 // (queries run in fixed chunks, each chunk's output concatenated in chunk order).
@@ -123,7 +125,7 @@ class UniformGrid {
 
   double cell_size_ = 1;
   double inverse_cell_size_ = 1;
-  double largest_extent_ = 0;
+  double largest_extent_[3] = {0, 0, 0};  // per axis: a flat cloth's boxes are thin in one
   double origin_[3] = {0, 0, 0};
   std::int64_t dims_[3] = {1, 1, 1};
   std::vector<std::uint32_t> cell_start_;  // cells + 1 offsets into the entries
@@ -137,12 +139,12 @@ void UniformGrid::scan(const Aabb& query, std::uint32_t lowest_index, Visit& vis
   if (entry_index_.empty()) return;
   // A box overlapping the query has its lower corner in [query.lo - extent, query.hi]; the
   // 1e-6 of a cell covers the rounding of that subtraction.
-  const double back = largest_extent_ + 1e-6 * cell_size_;
-  const std::int64_t x0 = cell_coordinate(double(query.lo[0]) - back, 0),
+  const double rounding = 1e-6 * cell_size_;
+  const std::int64_t x0 = cell_coordinate(query.lo[0] - largest_extent_[0] - rounding, 0),
                      x1 = cell_coordinate(query.hi[0], 0);
-  const std::int64_t y0 = cell_coordinate(double(query.lo[1]) - back, 1),
+  const std::int64_t y0 = cell_coordinate(query.lo[1] - largest_extent_[1] - rounding, 1),
                      y1 = cell_coordinate(query.hi[1], 1);
-  const std::int64_t z0 = cell_coordinate(double(query.lo[2]) - back, 2),
+  const std::int64_t z0 = cell_coordinate(query.lo[2] - largest_extent_[2] - rounding, 2),
                      z1 = cell_coordinate(query.hi[2], 2);
   // The cells x0..x1 of one (y, z) row are consecutive, and so are their entries: one run.
   for (std::int64_t cz = z0; cz <= z1; ++cz)

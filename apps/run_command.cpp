@@ -13,6 +13,7 @@
 #include <tessera/coloring/run_colouring.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/model_graph.hpp>
+#include <tessera/collision/self_intersections.hpp>
 #include <tessera/core/error.hpp>
 #include <tessera/core/fingerprint.hpp>
 #include <tessera/parallel/solver.hpp>

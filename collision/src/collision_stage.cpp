@@ -30,6 +30,7 @@ void check_collision_settings(const CollisionSettings& settings) {
   check_range("self-contact stiffness", settings.self_stiffness, 0, 1);
   if (settings.self_collision && !(settings.thickness > 0))
     throw InvalidInput("collisions: self-collision needs a positive thickness");
+  validate_colliders(settings.colliders);
 }
 
 struct CollisionStage::Buffers {
@@ -94,20 +95,18 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
   statistics_.vertex_triangle_contacts = statistics_.edge_edge_contacts = 0;
 
   if (buffers.self) {
-    buffers.self->detect(state,
-                         {.thickness = settings_.thickness, .margin = margin,
-                          .stiffness = settings_.self_stiffness},
-                         buffers.self_contacts);
-    ProximityDistanceConstraintInput input{.particle_count = state.size(),
-                                           .rest_distance = settings_.thickness,
-                                           .compression_stiffness = settings_.self_stiffness,
-                                           .stretch_stiffness = 0};
-    input.particles = buffers.self_contacts.triangle_point;
-    contacts.triangle_point_distance = make_triangle_point_distance_constraints(input);
-    input.particles = buffers.self_contacts.edge_edge;
-    contacts.edge_edge_distance = make_edge_edge_distance_constraints(input);
-    statistics_.vertex_triangle_contacts = buffers.self_contacts.triangle_point.size() / 4;
-    statistics_.edge_edge_contacts = buffers.self_contacts.edge_edge.size() / 4;
+    // Half a thickness of reach beyond the contact distance: the self-collision detection
+    // already adds each pair's motion over the substep (self_collision.hpp).
+    const SelfCollisionSettings self{.thickness = settings_.thickness,
+                                     .margin = settings_.thickness / 2,
+                                     .stiffness = settings_.self_stiffness};
+    buffers.self->detect(state, self, buffers.self_contacts);
+    SelfCollisionConstraints made =
+        make_self_collision_constraints(buffers.self_contacts, state.size(), self);
+    contacts.triangle_point_distance = std::move(made.triangle_point);
+    contacts.edge_edge_distance = std::move(made.edge_edge);
+    statistics_.vertex_triangle_contacts = buffers.self_contacts.triangle_point_count();
+    statistics_.edge_edge_contacts = buffers.self_contacts.edge_edge_count();
   }
 
   ++statistics_.substeps;

@@ -281,7 +281,7 @@ class Solver {
                          const ProjectionSettings& projection);
   /// chebyshev: the schedule's set, accelerated (see SolverSettings::chebyshev) in the
   /// `iteration`th (1-based) iteration of a solve.
-  void jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work,
+  void jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work, Real omega,
                         bool chebyshev = false);
   template <class Body>
   void parallel_chunks(std::size_t count, std::size_t chunk, Body&& body);

@@ -49,6 +49,7 @@ CollisionSettings collision_settings(const io::Scene& scene) {
   settings.dynamic_friction = description.dynamic_friction;
   settings.restitution = description.restitution;
   settings.self_collision = description.self_collision;
+  settings.self_collision_interval = description.self_collision_interval;
   return settings;
 }
 

@@ -31,12 +31,16 @@ void check_collision_settings(const CollisionSettings& settings) {
   if (settings.self_collision && !(settings.thickness > 0))
     throw InvalidInput("collisions: self-collision needs a positive thickness");
   validate_colliders(settings.colliders);
+  if (settings.self_collision_interval == 0)
+    throw InvalidInput("collisions: the self-collision interval must be at least 1 substep");
 }
 
 struct CollisionStage::Buffers {
   ColliderHits hits;
   std::unique_ptr<SelfCollision> self;
   SelfCollision::Contacts self_contacts;
+  /// The self-contacts of the last detection, kept for the substeps until the next.
+  SelfCollisionConstraints self_constraints;
 };
 
 CollisionStage::CollisionStage(CollisionSettings settings, std::vector<std::uint32_t> triangles,
@@ -95,16 +99,20 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
   statistics_.vertex_triangle_contacts = statistics_.edge_edge_contacts = 0;
 
   if (buffers.self) {
-    // Half a thickness of reach beyond the contact distance: the self-collision detection
-    // already adds each pair's motion over the substep (self_collision.hpp).
-    const SelfCollisionSettings self{.thickness = settings_.thickness,
-                                     .margin = settings_.thickness / 2,
-                                     .stiffness = settings_.self_stiffness};
-    buffers.self->detect(state, self, buffers.self_contacts);
-    SelfCollisionConstraints made =
-        make_self_collision_constraints(buffers.self_contacts, state.size(), self);
-    contacts.triangle_point_distance = std::move(made.triangle_point);
-    contacts.edge_edge_distance = std::move(made.edge_edge);
+    const std::size_t interval = settings_.self_collision_interval;
+    if (statistics_.substeps % interval == 0) {
+      // Half a thickness of reach beyond the contact distance: the detection already adds
+      // each pair's motion over the interval's substeps (self_collision.hpp).
+      const SelfCollisionSettings self{.thickness = settings_.thickness,
+                                       .margin = settings_.thickness / 2,
+                                       .stiffness = settings_.self_stiffness,
+                                       .motion_scale = Real(interval)};
+      buffers.self->detect(state, self, buffers.self_contacts);
+      buffers.self_constraints =
+          make_self_collision_constraints(buffers.self_contacts, state.size(), self);
+    }
+    contacts.triangle_point_distance = buffers.self_constraints.triangle_point;
+    contacts.edge_edge_distance = buffers.self_constraints.edge_edge;
     statistics_.vertex_triangle_contacts = buffers.self_contacts.triangle_point_count();
     statistics_.edge_edge_contacts = buffers.self_contacts.edge_edge_count();
   }

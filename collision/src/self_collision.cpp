@@ -134,6 +134,8 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
     throw InvalidInput("self collision: thickness must be positive and finite");
   if (!(settings.margin >= 0) || !std::isfinite(settings.margin))
     throw InvalidInput("self collision: margin must be finite and not negative");
+  if (!(settings.motion_scale >= 1) || !std::isfinite(settings.motion_scale))
+    throw InvalidInput("self collision: motion scale must be finite and at least 1");
   const Real reach = settings.thickness + settings.margin;
   const Particles particles{positions};
   const std::size_t triangle_count = triangles_.size() / 3;
@@ -145,10 +147,11 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
   // by more than the distance; so the grid misses no contact, and the boxes hold the swept
   // motion as well.
   motion_.resize(particle_count_);
+  const Real motion_scale = settings.motion_scale;
   parallel_over(particle_count_, [&](std::size_t i) {
-    motion_[i] = (Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
-                  particles.start(std::uint32_t(i)))
-                     .norm();
+    motion_[i] = motion_scale * (Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
+                                 particles.start(std::uint32_t(i)))
+                                    .norm();
   });
   vertex_boxes_.resize(particle_count_);
   parallel_over(particle_count_, [&](std::size_t i) {

@@ -69,13 +69,23 @@ void ProjectEdgeEdgeDistanceConstraints(ParticleArrays particles,
                              });
 }
 
+/// The part of C the constraint enforces: a side whose stiffness is 0 asks nothing (a contact
+/// made compression-only by a zero stretch stiffness has no residual while it is apart).
+template <class Batch>
+HWY_INLINE RealLanes enforced(RealLanes C, const Batch& batch, std::size_t i) {
+  const RealLanes none = zero<RealLanes>();
+  const RealLanes compression = load(batch.compression_stiffness.data(), i);
+  const RealLanes stretch = load(batch.stretch_stiffness.data(), i);
+  return select(C < none, select(compression > none, C, none), select(stretch > none, C, none));
+}
+
 void EdgePointDistanceResiduals(const ParticleArrays& particles,
                                 const EdgePointDistanceConstraints& batch, std::size_t begin,
                                 std::size_t end, Real* out) {
   residual_lanes<3>(particles, batch.particles, begin, end, out,
                     [&](const Vec3<RealLanes> (&p)[3], std::size_t i) {
                       const RealLanes rest = load(batch.rest_distance.data(), i);
-                      return relative(edge_point_distance_constraint(p[0], p[1], p[2], rest).C,
+                      return relative(enforced(edge_point_distance_constraint(p[0], p[1], p[2], rest).C, batch, i),
                                       rest);
                     });
 }
@@ -87,7 +97,7 @@ void TrianglePointDistanceResiduals(const ParticleArrays& particles,
       particles, batch.particles, begin, end, out,
       [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
         const RealLanes rest = load(batch.rest_distance.data(), i);
-        return relative(triangle_point_distance_constraint(p[0], p[1], p[2], p[3], rest).C,
+        return relative(enforced(triangle_point_distance_constraint(p[0], p[1], p[2], p[3], rest).C, batch, i),
                         rest);
       });
 }
@@ -99,7 +109,7 @@ void EdgeEdgeDistanceResiduals(const ParticleArrays& particles,
       particles, batch.particles, begin, end, out,
       [&](const Vec3<RealLanes> (&p)[4], std::size_t i) {
         const RealLanes rest = load(batch.rest_distance.data(), i);
-        return relative(edge_edge_distance_constraint(p[0], p[1], p[2], p[3], rest).C, rest);
+        return relative(enforced(edge_edge_distance_constraint(p[0], p[1], p[2], p[3], rest).C, batch, i), rest);
       });
 }
 

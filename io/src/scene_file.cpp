@@ -268,6 +268,7 @@ void read_collisions(const ObjectReader& reader, const std::filesystem::path& ba
       reader.fail("'self_collision' must be true or false, not " + ObjectReader::show(*self));
     collisions.self_collision = self->get<bool>();
   }
+  reader.read_count("self_collision_interval", collisions.self_collision_interval, 1);
   if (collisions.self_collision && !(collisions.thickness > 0))
     reader.fail("'thickness' must be positive with 'self_collision' on");
 }
@@ -305,7 +306,7 @@ SceneDescription describe(const Json& json, const std::string& name,
                "iterations", "frames", "velocity_damping", "chebyshev", "chebyshev_rho",
                "strategy", "mode", "sequential_order", "divergence_rms", "threads",
                "colliders", "thickness", "friction", "dynamic_friction", "restitution",
-               "self_collision"});
+               "self_collision", "self_collision_interval"});
   const Json* generator = reader.find("generator");
   const Json* mesh = reader.find("mesh");
   if ((generator != nullptr) == (mesh != nullptr))

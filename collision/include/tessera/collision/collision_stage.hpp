@@ -38,6 +38,8 @@ namespace tessera {
 inline constexpr Real kDefaultThickness = Real(0.005);
 inline constexpr Real kDefaultStaticFriction = Real(0.4);
 inline constexpr Real kDefaultDynamicFriction = Real(0.3);
+/// Substeps between self-collision detections (CollisionSettings::self_collision_interval).
+inline constexpr std::size_t kDefaultSelfCollisionInterval = 4;
 
 struct CollisionSettings {
   /// Static colliders.
@@ -57,6 +59,10 @@ struct CollisionSettings {
   bool self_collision = false;
   /// Stiffness of the self-contacts (PBD, compression only), in [0, 1].
   Real self_stiffness = 1;
+  /// Self-contacts are found every this many substeps, reaching as far as the particles move
+  /// in that many (SelfCollisionSettings::motion_scale), and kept in between; colliders are
+  /// queried every substep. ≥ 1. See kDefaultSelfCollisionInterval for the measurement.
+  std::size_t self_collision_interval = kDefaultSelfCollisionInterval;
 };
 
 /// Throws InvalidInput naming the setting: negative or non-finite thickness, friction or

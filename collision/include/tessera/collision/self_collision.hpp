@@ -73,6 +73,11 @@ struct SelfCollisionSettings {
   /// (three edges per vertex, each a query of the edge grid); without them a crossing of
   /// two edges whose vertices stay out of reach of the other's triangles goes unseen.
   bool edge_edge = true;
+  /// The substeps the contacts are meant to last: each particle's motion over the substep
+  /// is taken this many times, so a list found once holds every pair that can come within
+  /// reach over that many substeps at the same speeds (the kernels measure the closest
+  /// points anew in every projection, so a contact stays valid while it lasts). ≥ 1.
+  Real motion_scale = 1;
 };
 
 /// The particle arrays detection reads (SoA): predicted positions x, y, z and the positions

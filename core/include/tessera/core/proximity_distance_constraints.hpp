@@ -119,7 +119,9 @@ void project_edge_edge_distance_constraints(ParticleArrays particles,
 // no XPBD form).
 // constraint_residuals, Edge–point distance: |d − d0| / d0 with d the current point–segment
 // distance (closest point as in the kernel) and d0 the rest distance; |d| where d0 = 0.
-// Dimensionless for d0 > 0, a length for d0 = 0.
+// Dimensionless for d0 > 0, a length for d0 = 0. For every proximity family, a side whose
+// stiffness is 0 counts nothing (a compression-only contact, stretch stiffness 0, has no
+// residual while d ≥ d0).
 TESSERA_FAMILY_ENTRY_POINTS(EdgePointDistanceConstraints, project_edge_point_distance_constraints)
 
 // project_sequentially, Point–triangle distance:

@@ -90,6 +90,8 @@ struct CollisionDescription {
   Real dynamic_friction = Real(0.3);
   Real restitution = 0;
   bool self_collision = false;
+  /// Substeps between self-collision detections (CollisionSettings::self_collision_interval).
+  std::size_t self_collision_interval = 4;
 
   bool enabled() const { return self_collision || !colliders.empty(); }
 };

@@ -38,7 +38,8 @@
 //       { "shape": "mesh", "file": "bowl.obj" } ],  // relative to the scene file
 //     "thickness": 0.005,                    // contact distance (m)
 //     "friction": 0.4, "dynamic_friction": 0.3,  // "friction" sets both, then the other wins
-//     "restitution": 0, "self_collision": false
+//     "restitution": 0, "self_collision": false,
+//     "self_collision_interval": 4           // substeps between self-collision detections
 //   }
 //
 // What the pin rules pick is said with PinRule (scene_description.hpp).

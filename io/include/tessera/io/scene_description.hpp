@@ -91,7 +91,7 @@ struct CollisionDescription {
   Real restitution = 0;
   bool self_collision = false;
   /// Substeps between self-collision detections (CollisionSettings::self_collision_interval).
-  std::size_t self_collision_interval = 4;
+  std::size_t self_collision_interval = 1;
 
   bool enabled() const { return self_collision || !colliders.empty(); }
 };

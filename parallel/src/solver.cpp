@@ -727,13 +727,12 @@ void Solver::clear_collisions() {
 }
 
 void Solver::detect_contacts(Real h) {
-  arena_->execute([&] {
-    collisions_->detect(state_, h, Real(settings_.gravity.norm()), contact_batches_);
-  });
+  ConstraintSets found;
+  arena_->execute(
+      [&] { collisions_->detect(state_, h, Real(settings_.gravity.norm()), found); });
   // The contacts come in the schedule's numbering, sorted by particle: the set's order is
   // theirs, whatever the thread count.
-  contacts_ = extra_set(std::move(contact_batches_), contact_source_, true);
-  contact_batches_ = ConstraintSets();
+  contacts_ = extra_set(std::move(found), contact_source_, true);
   contacts_work_.bind(contacts_);
   build_stages();
 }

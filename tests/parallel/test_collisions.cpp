@@ -111,20 +111,25 @@ TEST(Collisions, EveryThreadCountGivesTheSameStateAndEveryModeStaysOutside) {
   }
 }
 
+/// A solver of one free particle at `start` (mode gs, default gravity).
+Solver one_particle(const Vector3r& start, std::size_t substeps, std::size_t iterations) {
+  Model model;
+  model.particles = ParticleState(std::vector<Vector3r>{start}, std::vector<Real>{Real(1)});
+  SolverSettings settings;
+  settings.mode = SolverMode::gs;
+  settings.substeps = substeps;
+  settings.iterations = iterations;
+  return make_solver(model, settings);
+}
+
 /// A particle resting on a plane tilted by θ about z (normal (−sin θ, cos θ, 0)), with
 /// static friction μs = μk = μ; how far it moves in one second from rest.
 Real slide(Real theta, Real mu) {
-  Model model;
   const Vector3r normal(-std::sin(theta), std::cos(theta), 0);
   const Real thickness = Real(0.001);
   // Resting on the plane through the origin, a thickness above it.
   const std::vector<Vector3r> start = {normal * thickness};
-  model.particles = ParticleState(start, std::vector<Real>{Real(1)});
-  SolverSettings settings;
-  settings.mode = SolverMode::gs;
-  settings.substeps = 20;
-  settings.iterations = 2;
-  Solver solver = make_solver(model, settings);
+  Solver solver = one_particle(start[0], 20, 2);
   CollisionSettings collisions;
   collisions.colliders = {PlaneCollider{normal, 0}};
   collisions.thickness = thickness;
@@ -151,13 +156,7 @@ TEST(Collisions, StaticFrictionHoldsBelowItsAngleAndLetsGoAboveIt) {
 /// The highest point a particle dropped from 1 m above the ground reaches after its first
 /// bounce, with restitution e.
 Real bounce(Real e) {
-  Model model;
-  model.particles = ParticleState(std::vector<Vector3r>{Vector3r(0, 1, 0)}, std::vector<Real>{1});
-  SolverSettings settings;
-  settings.mode = SolverMode::gs;
-  settings.substeps = 40;
-  settings.iterations = 1;
-  Solver solver = make_solver(model, settings);
+  Solver solver = one_particle(Vector3r(0, 1, 0), 40, 1);
   CollisionSettings collisions;
   collisions.colliders = {PlaneCollider{Vector3r(0, 1, 0), 0}};
   collisions.thickness = 0;

@@ -308,7 +308,6 @@ class Solver {
   std::unique_ptr<CollisionStage> collisions_;
   JacobiSet contacts_;
   JacobiWork contacts_work_;
-  ConstraintSets contact_batches_;
   std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> contact_source_;
   /// The time step of the last projections (step: the substep; project: its dt), which the
   /// XPBD residual C + α̃λ is measured at.

@@ -14,6 +14,7 @@
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/model_graph.hpp>
 #include <tessera/collision/self_intersections.hpp>
+#include <tessera/collision/solid_contacts.hpp>
 #include <tessera/core/error.hpp>
 #include <tessera/core/fingerprint.hpp>
 #include <tessera/parallel/solver.hpp>
@@ -139,10 +140,14 @@ int run_command(const RunOptions& options) {
   if (contacts.enabled()) collisions = collision_settings(scene);
   Solver solver = colouring ? Solver(std::move(scene.model), colouring->colouring, settings)
                             : Solver(std::move(scene.model), settings);
+  // Self-collision works on the surface; a solid's boundary faces get particle–tet contacts.
+  const auto when_self = [&](const std::vector<io::VertexIndex>& elements) {
+    return contacts.self_collision ? std::span<const std::uint32_t>(elements)
+                                   : std::span<const std::uint32_t>();
+  };
   if (collisions)
-    solver.set_collisions(*collisions, contacts.self_collision
-                                           ? std::span<const std::uint32_t>(scene.surface_triangles)
-                                           : std::span<const std::uint32_t>());
+    solver.set_collisions(*collisions, when_self(scene.surface_triangles),
+                          when_self(scene.mesh.tetrahedra));
 
   if (output) output->write(0, 0.0, solver.positions());
   Residual initial, final;
@@ -196,7 +201,10 @@ int run_command(const RunOptions& options) {
     summary.add("contacts_mean", found.contacts_mean());
     summary.add("contacts_max", found.contacts_max);
     summary.add("seconds_collision", found.seconds_detection);
-    summary.add("penetration_max", double(penetration_depth(stage->settings().colliders, positions)));
+    // The deepest point inside a collider or inside another solid body.
+    summary.add("penetration_max",
+                double(std::max(penetration_depth(stage->settings().colliders, positions),
+                                solid_penetration_depth(positions, scene.mesh.tetrahedra))));
     summary.add("self_intersections",
                 count_self_intersections(positions, scene.surface_triangles));
   }

@@ -29,7 +29,7 @@ Enum choose(const std::string& option, const std::string& value,
 void add_scene_options(CLI::App& command, SceneOptions& options) {
   command.add_option("scene", options.scene,
                      "cloth, cloth:N, cloth:CxR (vertices), drape, drape:N (a cloth falling "
-                     "onto a sphere), bar, bar:XxYxZ (cells), a mesh file (.obj, .node/.ele, "
+                     "onto a sphere), pile, pile:N (FEM blocks falling onto each other), bar, bar:XxYxZ (cells), a mesh file (.obj, .node/.ele, "
                      ".msh) or a scene file (.json)")
       ->capture_default_str();
   command.add_option("--shell-material", options.shell_material,

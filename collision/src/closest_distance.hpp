@@ -1,6 +1,7 @@
 // Squared distances between the primitives of a mesh, after Ericson, Real-Time Collision
-// Detection §5.1.5 (point–triangle, by Voronoi regions) and §5.1.9 (segment–segment). Only
-// the distance is needed (the kernels find their own closest points), so no sqrt here.
+// Detection §5.1.5 (point–triangle, by Voronoi regions) and §5.1.9 (segment–segment). The
+// self-contacts need only the distance (their kernels find their own closest points); the
+// solid contacts also take the closest point on a face.
 #pragma once
 
 #include <algorithm>
@@ -9,37 +10,34 @@
 
 namespace tessera::detail {
 
-inline Real squared_point_triangle_distance(const Vector3r& p, const Vector3r& a,
-                                            const Vector3r& b, const Vector3r& c) {
+/// The point of triangle (a, b, c) closest to p.
+inline Vector3r closest_point_on_triangle(const Vector3r& p, const Vector3r& a, const Vector3r& b,
+                                          const Vector3r& c) {
   const Vector3r ab = b - a, ac = c - a, ap = p - a;
   const Real d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return ap.squaredNorm();  // vertex a
+  if (d1 <= 0 && d2 <= 0) return a;  // vertex a
   const Vector3r bp = p - b;
   const Real d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return bp.squaredNorm();  // vertex b
+  if (d3 >= 0 && d4 <= d3) return b;  // vertex b
   const Real vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {  // edge ab
-    const Real v = d1 / (d1 - d3);
-    return (ap - v * ab).squaredNorm();
-  }
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;  // edge ab
   const Vector3r cp = p - c;
   const Real d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return cp.squaredNorm();  // vertex c
+  if (d6 >= 0 && d5 <= d6) return c;  // vertex c
   const Real vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {  // edge ac
-    const Real w = d2 / (d2 - d6);
-    return (ap - w * ac).squaredNorm();
-  }
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;  // edge ac
   const Real va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {  // edge bc
-    const Real w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return (bp - w * (c - b)).squaredNorm();
-  }
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)  // edge bc
+    return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
   // Inside the face. A degenerate (zero-area) triangle never gets here: one of the edge or
   // vertex regions above takes every point.
   const Real denominator = va + vb + vc;
-  const Real v = vb / denominator, w = vc / denominator;
-  return (ap - v * ab - w * ac).squaredNorm();
+  return a + (vb / denominator) * ab + (vc / denominator) * ac;
+}
+
+inline Real squared_point_triangle_distance(const Vector3r& p, const Vector3r& a,
+                                            const Vector3r& b, const Vector3r& c) {
+  return (p - closest_point_on_triangle(p, a, b, c)).squaredNorm();
 }
 
 inline Real squared_segment_distance(const Vector3r& p1, const Vector3r& q1, const Vector3r& p2,

@@ -6,6 +6,7 @@
 #include <string>
 
 #include <tessera/collision/self_collision.hpp>
+#include <tessera/collision/solid_contacts.hpp>
 #include <tessera/core/error.hpp>
 
 namespace tessera {
@@ -41,10 +42,15 @@ struct CollisionStage::Buffers {
   SelfCollision::Contacts self_contacts;
   /// The self-contacts of the last detection, kept for the substeps until the next.
   SelfCollisionConstraints self_constraints;
+  ParticleTetContacts solid_constraints;
+  /// The faces of the solids among the surface triangles (null without solids).
+  std::unique_ptr<SolidSurface> solids;
+  std::vector<ParticleIndex> distance_contacts;
 };
 
 CollisionStage::CollisionStage(CollisionSettings settings, std::vector<std::uint32_t> triangles,
-                               std::size_t particle_count)
+                               std::size_t particle_count,
+                               std::span<const std::uint32_t> tetrahedra)
     : settings_(std::move(settings)),
       triangles_(std::move(triangles)),
       particle_count_(particle_count),
@@ -60,6 +66,10 @@ CollisionStage::CollisionStage(CollisionSettings settings, std::vector<std::uint
                          std::to_string(particle_count_));
   if (settings_.self_collision && !triangles_.empty())
     buffers_->self = std::make_unique<SelfCollision>(triangles_, particle_count_);
+  if (!tetrahedra.empty()) {
+    auto solids = std::make_unique<SolidSurface>(tetrahedra, triangles_, particle_count_);
+    if (!solids->empty()) buffers_->solids = std::move(solids);
+  }
 }
 
 CollisionStage::~CollisionStage() = default;
@@ -97,6 +107,7 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
   }
   statistics_.collider_contacts = hit_count;
   statistics_.vertex_triangle_contacts = statistics_.edge_edge_contacts = 0;
+  statistics_.particle_tet_contacts = 0;
 
   if (buffers.self) {
     const std::size_t interval = settings_.self_collision_interval;
@@ -108,6 +119,16 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
                                        .stiffness = settings_.self_stiffness,
                                        .motion_scale = Real(interval)};
       buffers.self->detect(state, self, buffers.self_contacts);
+      if (buffers.solids) {
+        // Vertex–face pairs of solids become particle–tet contacts; the rest stay distances.
+        // Edge pairs of two solids are dropped (solid_contacts.hpp).
+        split_solid_contacts(*buffers.solids, buffers.self_contacts, state, settings_.thickness,
+                             settings_.dynamic_friction, buffers.distance_contacts,
+                             buffers.solid_constraints);
+        buffers.self_contacts.triangle_point.swap(buffers.distance_contacts);
+        buffers.self_contacts.triangle_point_triangle.clear();
+        drop_solid_edge_pairs(*buffers.solids, buffers.self_contacts.edge_edge);
+      }
       buffers.self_constraints =
           make_self_collision_constraints(buffers.self_contacts, state.size(), self);
     }
@@ -115,6 +136,10 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
     contacts.edge_edge_distance = buffers.self_constraints.edge_edge;
     statistics_.vertex_triangle_contacts = buffers.self_contacts.triangle_point_count();
     statistics_.edge_edge_contacts = buffers.self_contacts.edge_edge_count();
+    if (buffers.solids) {
+      contacts.particle_tet_contact = buffers.solid_constraints;
+      statistics_.particle_tet_contacts = buffers.solid_constraints.size();
+    }
   }
 
   ++statistics_.substeps;

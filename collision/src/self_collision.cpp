@@ -221,8 +221,10 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
       edge_edge_pairs_);
 
   out.triangle_point.resize(4 * triangle_point_pairs_.size());
+  out.triangle_point_triangle.resize(triangle_point_pairs_.size());
   parallel_over(triangle_point_pairs_.size(), [&](std::size_t k) {
     const auto [p, t] = triangle_point_pairs_[k];
+    out.triangle_point_triangle[k] = t;
     ParticleIndex* contact = out.triangle_point.data() + 4 * k;
     contact[0] = p;
     std::copy_n(triangles_.data() + 3 * std::size_t(t), 3, contact + 1);

@@ -319,8 +319,8 @@ SceneDescription describe(const Json& json, const std::string& name,
     const auto names = [&](const std::string& kind) {
       return spec == kind || spec.rfind(kind + ":", 0) == 0;
     };
-    if (!names("cloth") && !names("bar") && !names("drape"))  // never a path here
-      reader.fail("'generator' must be \"cloth\", \"cloth:CxR\", \"drape:N\", \"bar\" or \"bar:XxYxZ\", not " +
+    if (!names("cloth") && !names("bar") && !names("drape") && !names("pile"))  // never a path here
+      reader.fail("'generator' must be \"cloth\", \"cloth:CxR\", \"drape:N\", \"pile:N\", \"bar\" or \"bar:XxYxZ\", not " +
                   ObjectReader::show(*generator));
     try {
       description = parse_scene_spec(spec);
@@ -435,6 +435,22 @@ void make_drape(SceneDescription& description, std::size_t vertices) {
   description.simulation.frames = 120;
 }
 
+/// Blocks dropped crosswise onto the ground, with self-collision: their vertex–face contacts
+/// are particle–tet contacts (solid_contacts.hpp).
+void make_pile(SceneDescription& description, std::size_t bodies) {
+  description.source = SceneSource::pile;
+  description.pile_bodies = bodies;
+  description.pins.kind = PinRule::Kind::none;
+  CollisionDescription& collisions = description.collisions;
+  ColliderDescription ground;
+  ground.shape = ColliderShape::plane;
+  ground.normal = Vector3r(0, 1, 0);
+  ground.offset = 0;
+  collisions.colliders = {ground};
+  collisions.self_collision = true;
+  description.simulation.frames = 90;
+}
+
 }  // namespace
 
 SceneDescription parse_scene_spec(std::string_view spec) {
@@ -481,6 +497,15 @@ SceneDescription parse_scene_spec(std::string_view spec) {
     if (n[0] < 2) return fail("a cloth needs at least 2 vertices per side");
     if (product_up_to({n[0], n[0]}, std::size_t(1) << 31) == 0) return fail("more than 2^31 vertices");
     make_drape(description, n[0]);
+    return description;
+  }
+  if (generator("pile")) {
+    std::size_t n[1] = {kPileBodies};
+    if (spec.size() > 4 && !parse_sizes(spec.substr(5), n, 1))
+      return fail("expected pile or pile:N with a number of blocks, e.g. pile:8");
+    if (n[0] < 1) return fail("a pile needs at least 1 block");
+    if (n[0] > kMaxPileBodies) return fail("at most " + std::to_string(kMaxPileBodies) + " blocks");
+    make_pile(description, n[0]);
     return description;
   }
   if (generator("bar")) {

@@ -371,6 +371,42 @@ PinnedMesh cloth_mesh(std::size_t columns, std::size_t rows, DiagonalPattern dia
   return cloth;
 }
 
+/// The pile scene's blocks: 3 × 3 × 8 cells of 4 cm (12 × 12 × 32 cm), two per layer, the
+/// layers crosswise (long along z, then along x) 20 cm apart from 10 cm above the ground,
+/// each block tilted 7° about its long axis (the two of a layer opposite ways) so they land
+/// on edges; no pins.
+PinnedMesh pile_mesh(std::size_t bodies) {
+  constexpr Real kSpacing = Real(0.04);
+  const TetrahedralBar block = make_tetrahedral_bar(3, 3, 8, kSpacing);
+  const Vector3r centre(Real(1.5) * kSpacing, Real(1.5) * kSpacing, 4 * kSpacing);
+  PinnedMesh pile;
+  Mesh& mesh = pile.mesh;
+  mesh.positions.reserve(bodies * block.vertex_count());
+  mesh.tetrahedra.reserve(bodies * block.tetrahedron_indices.size());
+  for (std::size_t body = 0; body < bodies; ++body) {
+    const std::size_t layer = body / 2;
+    const Real side = body % 2 == 0 ? Real(-1) : Real(1);
+    const bool crosswise = layer % 2 == 1;
+    const Real tilt = side * Real(0.08);  // radians, about the block's long axis (z)
+    const Real c = std::cos(tilt), s = std::sin(tilt);
+    // The last block of an odd count sits alone in the middle of its layer.
+    const Real offset = (body + 1 == bodies && bodies % 2 == 1) ? 0 : side * Real(0.09);
+    const Vector3r at = crosswise ? Vector3r(0, Real(0.08) + Real(0.15) * Real(layer), offset)
+                                  : Vector3r(offset, Real(0.08) + Real(0.15) * Real(layer), 0);
+    const VertexIndex first = VertexIndex(mesh.positions.size());
+    for (const Vector3r& rest : block.positions) {
+      const Vector3r local = rest - centre;
+      Vector3r tilted(c * local.x() - s * local.y(), s * local.x() + c * local.y(), local.z());
+      // Crosswise: a quarter turn about y, (x, y, z) -> (z, y, -x) (a rotation, so the
+      // tetrahedra keep their positive orientation).
+      if (crosswise) tilted = Vector3r(tilted.z(), tilted.y(), -tilted.x());
+      mesh.positions.push_back(tilted + at);
+    }
+    for (const VertexIndex v : block.tetrahedron_indices) mesh.tetrahedra.push_back(first + v);
+  }
+  return pile;
+}
+
 /// The default bar (make_bar_scene): 0.1 m cells, fixed at z = 0.
 PinnedMesh bar_mesh(const std::array<std::size_t, 3>& cells) {
   TetrahedralBar bar = make_tetrahedral_bar(cells[0], cells[1], cells[2], Real(0.1));
@@ -541,6 +577,10 @@ Scene build_scene(const SceneDescription& description) {
       PinnedMesh bar = bar_mesh(description.bar_cells);
       mesh = std::move(bar.mesh);
       default_pins = std::move(bar.pinned);
+      break;
+    }
+    case SceneSource::pile: {
+      mesh = pile_mesh(description.pile_bodies).mesh;
       break;
     }
     case SceneSource::mesh: {

@@ -702,20 +702,30 @@ JacobiSet Solver::extra_set(ConstraintSets constraints,
 }
 
 void Solver::set_collisions(CollisionSettings settings,
-                            std::span<const std::uint32_t> surface_triangles) {
-  if (surface_triangles.size() % 3 != 0)
-    throw InvalidInput("collisions: the surface has " + std::to_string(surface_triangles.size()) +
-                       " triangle indices, not a multiple of 3");
-  std::vector<std::uint32_t> scheduled(surface_triangles.size());
-  for (std::size_t i = 0; i < surface_triangles.size(); ++i) {
-    if (surface_triangles[i] >= state_.size())
-      throw InvalidInput("collisions: surface triangle " + std::to_string(i / 3) +
-                         " names particle " + std::to_string(surface_triangles[i]) +
-                         ", the model has " + std::to_string(state_.size()));
-    scheduled[i] = schedule_.scheduled_particle(surface_triangles[i]);
-  }
-  collisions_ =
-      std::make_unique<CollisionStage>(std::move(settings), std::move(scheduled), state_.size());
+                            std::span<const std::uint32_t> surface_triangles,
+                            std::span<const std::uint32_t> tetrahedra) {
+  // Both element lists in the schedule's numbering, so no contact is renumbered per substep.
+  const auto scheduled = [&](std::span<const std::uint32_t> elements, std::size_t corners,
+                             const char* what, const char* whole, const char* noun) {
+    if (elements.size() % corners != 0)
+      throw InvalidInput("collisions: the " + std::string(whole) + " has " +
+                         std::to_string(elements.size()) + " " + noun +
+                         " indices, not a multiple of " + std::to_string(corners));
+    std::vector<std::uint32_t> result(elements.size());
+    for (std::size_t i = 0; i < elements.size(); ++i) {
+      if (elements[i] >= state_.size())
+        throw InvalidInput("collisions: " + std::string(what) + " " +
+                           std::to_string(i / corners) + " names particle " +
+                           std::to_string(elements[i]) + ", the model has " +
+                           std::to_string(state_.size()));
+      result[i] = schedule_.scheduled_particle(elements[i]);
+    }
+    return result;
+  };
+  std::vector<std::uint32_t> triangles = scheduled(surface_triangles, 3, "surface triangle", "surface", "triangle");
+  const std::vector<std::uint32_t> tets = scheduled(tetrahedra, 4, "tetrahedron", "solid", "tetrahedron");
+  collisions_ = std::make_unique<CollisionStage>(std::move(settings), std::move(triangles),
+                                                 state_.size(), tets);
 }
 
 void Solver::clear_collisions() {

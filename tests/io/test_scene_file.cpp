@@ -144,6 +144,38 @@ TEST(SceneSpec, DrapeIsAFreeClothOverASphereAndTheGroundAgainstItself) {
   EXPECT_FALSE(parse_scene_spec("cloth").collisions.enabled());
 }
 
+TEST(SceneSpec, PileIsBlocksDroppedOntoTheGroundAndOntoEachOther) {
+  const SceneDescription pile = parse_scene_spec("pile");
+  EXPECT_EQ(pile.source, SceneSource::pile);
+  EXPECT_EQ(pile.pile_bodies, kPileBodies);
+  EXPECT_EQ(pile.pins.kind, PinRule::Kind::none);
+  EXPECT_EQ(pile.simulation.frames, 90u);
+  ASSERT_EQ(pile.collisions.colliders.size(), 1u);
+  EXPECT_EQ(pile.collisions.colliders[0].shape, ColliderShape::plane);
+  EXPECT_TRUE(pile.collisions.self_collision);
+  EXPECT_EQ(parse_scene_spec("pile:3").pile_bodies, 3u);
+  EXPECT_EQ(spec_error("pile:x"), "scene 'pile:x': expected pile or pile:N with a number of "
+                                  "blocks, e.g. pile:8");
+  EXPECT_EQ(spec_error("pile:0"), "scene 'pile:0': a pile needs at least 1 block");
+  EXPECT_EQ(spec_error("pile:5000"), "scene 'pile:5000': at most 4096 blocks");
+  EXPECT_EQ(from_json(R"({"generator": "pile:2", "friction": 0.6})").pile_bodies, 2u);
+
+  // Built: N separate blocks of 4 × 4 × 9 vertices, every tetrahedron positive, none
+  // overlapping another block, all above the ground, each block's surface its own.
+  const Scene scene = build_scene(parse_scene_spec("pile:3"));
+  ASSERT_EQ(scene.mesh.positions.size(), 3u * 144u);
+  EXPECT_EQ(scene.mesh.tetrahedra.size(), 3u * 3 * 3 * 8 * 6 * 4);
+  EXPECT_TRUE(scene.pinned.empty());
+  for (std::size_t t = 0; t < scene.mesh.tetrahedra.size(); t += 4) {
+    const auto& x = scene.mesh.positions;
+    const auto* v = scene.mesh.tetrahedra.data() + t;
+    EXPECT_GT((x[v[1]] - x[v[0]]).dot((x[v[2]] - x[v[0]]).cross(x[v[3]] - x[v[0]])), 0);
+    EXPECT_EQ(v[0] / 144, v[3] / 144) << "a tetrahedron stays in its block";
+  }
+  for (const Vector3r& p : scene.mesh.positions) EXPECT_GT(p.y(), Real(0.01));
+  EXPECT_EQ(scene.surface_triangles.size(), 3u * 2 * 2 * (3 * 3 + 3 * 8 + 3 * 8) * 3);
+}
+
 TEST(SceneFile, CollidersAndContactKeys) {
   const SceneDescription scene = from_json(R"({"generator": "cloth:8",
     "colliders": [{"shape": "plane", "normal": [0, 2, 0], "offset": -1},

@@ -11,6 +11,9 @@
 #include <vector>
 
 #include <tessera/collision/self_intersections.hpp>
+#include <tessera/collision/solid_contacts.hpp>
+#include <tessera/io/generators.hpp>
+#include <tessera/io/scenes.hpp>
 #include <tessera/core/error.hpp>
 #include <tessera/parallel/solver.hpp>
 
@@ -108,6 +111,71 @@ TEST(Collisions, EveryThreadCountGivesTheSameStateAndEveryModeStaysOutside) {
       if (first.empty()) first = positions;
       else EXPECT_TRUE(same_bits(first, positions)) << test::mode_name(mode);
     }
+  }
+}
+
+/// Two FEM blocks of 2 × 2 × 5 cells of 4 cm (8 × 8 × 20 cm): one lying on the ground
+/// (y = 0) a thickness above it, the other crosswise and tilted 0.2 rad about its long axis,
+/// dropped from 5 cm above it (the tool's pile scene, smaller).
+struct TwoBlockPile {
+  Model model;
+  std::vector<std::uint32_t> tetrahedra, surface;
+  CollisionSettings collisions;
+  static constexpr Real kThickness = Real(0.004);
+
+  TwoBlockPile() {
+    const io::TetrahedralBar block = io::make_tetrahedral_bar(2, 2, 5, Real(0.04));
+    std::vector<Vector3r> positions;
+    const Real c = std::cos(Real(0.2)), s = std::sin(Real(0.2));
+    for (int b = 0; b < 2; ++b) {
+      const std::uint32_t first = std::uint32_t(positions.size());
+      for (const Vector3r& rest : block.positions) {
+        const Vector3r local = rest - Vector3r(Real(0.04), Real(0.04), Real(0.1));
+        if (b == 0) {
+          positions.push_back(local + Vector3r(0, Real(0.04) + kThickness, 0));
+        } else {
+          const Vector3r tilted(c * local.x() - s * local.y(), s * local.x() + c * local.y(),
+                                local.z());
+          positions.push_back(Vector3r(tilted.z(), tilted.y(), -tilted.x()) +
+                              Vector3r(0, Real(0.19), 0));
+        }
+      }
+      for (const auto v : block.tetrahedron_indices) tetrahedra.push_back(first + v);
+    }
+    model = io::make_solid(positions, tetrahedra, {});
+    surface = io::boundary_triangles(tetrahedra);
+    collisions.colliders = {PlaneCollider{Vector3r(0, 1, 0), 0}};
+    collisions.thickness = kThickness;
+    collisions.self_collision = true;
+  }
+};
+
+TEST(Collisions, ABlockDroppedOnABlockRestsOnItWithoutPenetrationTheSameOnAnyThreadCount) {
+  const TwoBlockPile pile;
+  std::vector<Vector3r> first;
+  for (const std::size_t threads : {1u, 2u}) {
+    Solver solver = make_solver(pile.model, drape_settings(SolverMode::gs, threads));
+    solver.set_collisions(pile.collisions, pile.surface, pile.tetrahedra);
+    std::size_t solid_contacts = 0;
+    for (int frame = 0; frame < 45; ++frame) {
+      solver.step();
+      solid_contacts = std::max(solid_contacts, solver.collisions()->statistics().particle_tet_contacts);
+    }
+    EXPECT_GT(solid_contacts, 0u) << "the blocks met through particle–tet contacts";
+    const std::vector<Vector3r> positions = solver.positions();
+    EXPECT_LE(solid_penetration_depth(positions, pile.tetrahedra), TwoBlockPile::kThickness);
+    EXPECT_EQ(count_self_intersections(positions, pile.surface), 0u);
+    // The upper block rests on the lower one (whose top is 8 cm up), not on the ground.
+    const std::size_t half = positions.size() / 2;
+    Real lowest_upper = positions[half].y(), highest_lower = positions[0].y();
+    for (std::size_t i = 0; i < half; ++i) highest_lower = std::max(highest_lower, positions[i].y());
+    for (std::size_t i = half; i < positions.size(); ++i)
+      lowest_upper = std::min(lowest_upper, positions[i].y());
+    EXPECT_GT(lowest_upper, highest_lower - TwoBlockPile::kThickness);
+    EXPECT_GT(lowest_upper, Real(0.06));
+    for (const Vector3r& p : positions) EXPECT_GE(p.y(), -Real(1e-4)) << "above the ground";
+    if (first.empty()) first = positions;
+    else EXPECT_TRUE(same_bits(first, positions)) << "1 and 2 threads";
   }
 }
 
@@ -218,6 +286,13 @@ TEST(Collisions, StaticParticlesNeverMoveAndBadSettingsAreErrors) {
             "collisions: surface triangle 0 names particle 999, the model has 64");
   EXPECT_EQ(error(drape.collisions, {0, 1}),
             "collisions: the surface has 2 triangle indices, not a multiple of 3");
+  EXPECT_EQ(error(drape.collisions, {}), "no error");
+  try {
+    solver.set_collisions(drape.collisions, drape.triangles, std::vector<std::uint32_t>{0, 1, 2, 64});
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidInput& e) {
+    EXPECT_STREQ(e.what(), "collisions: tetrahedron 0 names particle 64, the model has 64");
+  }
   // Clearing the stage drops the contacts.
   solver.clear_collisions();
   EXPECT_EQ(solver.collisions(), nullptr);

@@ -196,6 +196,23 @@ TEST_F(Cli, DrapeEndsOnTheSphereWithoutPenetrationOrSelfIntersection) {
   EXPECT_FALSE(run_json({"run", "cloth:8", "--frames", "1"}).contains("contacts_mean"));
 }
 
+TEST_F(Cli, PileBlocksLandOnEachOtherWithoutPenetration) {
+  const std::vector<std::string> base = {"run", "pile:3", "--frames", "30", "--substeps", "16"};
+  auto one = base, two = base;
+  one.insert(one.end(), {"--threads", "1"});
+  two.insert(two.end(), {"--threads", "2"});
+  const Json a = run_json(one), b = run_json(two);
+  EXPECT_EQ(a["state_hash"], b["state_hash"]);
+  EXPECT_GT(a["contacts_max"].get<double>(), 20) << "the top block lands on the lower two";
+  EXPECT_LE(a["penetration_max"].get<double>(), 0.005) << "at most the thickness deep";
+  EXPECT_EQ(a["self_intersections"], 0);
+  EXPECT_TRUE(a.contains("residual_particle_tet_contact_max_final"));
+  const Json example = run_json(
+      {"run", std::string(TESSERA_SOURCE_DIR) + "/examples/scenes/pile.json", "--frames", "1"});
+  EXPECT_EQ(example["scene"], "pile");
+  EXPECT_EQ(example["particles"], 8 * 144);
+}
+
 TEST_F(Cli, OneAndTwoThreadsGiveTheSameState) {
   std::map<std::string, std::string> hashes;
   for (const char* mode : {"gs", "jacobi", "hybrid", "sequential"}) {

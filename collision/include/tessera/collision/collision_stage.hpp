@@ -6,9 +6,11 @@
 //     state ──► colliders (plane, sphere, box, capsule, mesh)  ──► collider_contact
 //          │     one closest-point query per movable particle        (unilateral, friction,
 //          │                                                          restitution)
-//          └──► self-collision (cloth surface)                  ──► triangle_point_distance
+//          └──► self-collision (the surface)                    ──► triangle_point_distance
 //                spatial hash of the swept primitives,                edge_edge_distance
 //                vertex–triangle and edge–edge within reach           (compression only)
+//                  a vertex near a solid's boundary face      ──► particle_tet_contact
+//                  (solid_contacts.hpp)                               (outwards, friction)
 //
 // Why per substep: a contact is a linearisation (a tangent plane, a closest pair) that is
 // valid only near the positions it was made at; remade every substep (h = 1/60/32 s by
@@ -60,7 +62,9 @@ struct CollisionSettings {
   /// Coefficient of restitution e ∈ [0, 1] against colliders; approaches slower than
   /// 2 |g| h bounce with e = 0 (so resting contacts do not jitter).
   Real restitution = 0;
-  /// Cloth against itself: vertex–triangle and edge–edge contacts of the surface.
+  /// The surface against itself: vertex–triangle and edge–edge contacts of the surface
+  /// (cloth folding onto itself; solids against one another, whose vertex–face contacts
+  /// are particle–tet contacts with friction dynamic_friction).
   bool self_collision = false;
   /// Stiffness of the self-contacts (PBD, compression only), in [0, 1].
   Real self_stiffness = 1;
@@ -80,6 +84,7 @@ struct CollisionStatistics {
   std::size_t collider_contacts = 0;
   std::size_t vertex_triangle_contacts = 0;
   std::size_t edge_edge_contacts = 0;
+  std::size_t particle_tet_contacts = 0;
   /// Over every substep detected so far: the number of substeps, the sum and the largest
   /// number of contacts of one substep, and the wall time of detection (broad + narrow phase
   /// and building the batches).
@@ -89,7 +94,8 @@ struct CollisionStatistics {
   double seconds_detection = 0;
 
   std::size_t contacts() const {
-    return collider_contacts + vertex_triangle_contacts + edge_edge_contacts;
+    return collider_contacts + vertex_triangle_contacts + edge_edge_contacts +
+           particle_tet_contacts;
   }
   double contacts_mean() const { return substeps == 0 ? 0 : double(contacts_sum) / double(substeps); }
 };
@@ -97,10 +103,12 @@ struct CollisionStatistics {
 class CollisionStage {
  public:
   /// `triangles` (3 indices each, in the numbering of the states detect() will be given) is
-  /// the surface self-collision works on; empty without self-collision. Throws InvalidInput
-  /// for bad settings or a triangle index ≥ particle_count.
+  /// the surface self-collision works on; empty without self-collision. `tetrahedra` (4 each,
+  /// same numbering) are the solids: a surface triangle that is a face of one gets
+  /// particle–tet contacts (solid_contacts.hpp). Throws InvalidInput for bad settings, an
+  /// index ≥ particle_count or a tetrahedron naming a particle twice.
   CollisionStage(CollisionSettings settings, std::vector<std::uint32_t> triangles,
-                 std::size_t particle_count);
+                 std::size_t particle_count, std::span<const std::uint32_t> tetrahedra = {});
   ~CollisionStage();
   CollisionStage(CollisionStage&&) noexcept;
   CollisionStage& operator=(CollisionStage&&) noexcept;

@@ -108,6 +108,8 @@ class SelfCollision {
     /// Four particles per contact (p0, p1, p2, p3), edge (p0, p1) before edge (p2, p3) in
     /// the edge order, sorted by that pair of edges.
     std::vector<ParticleIndex> edge_edge;
+    /// The mesh's triangle index of each vertex–triangle contact.
+    std::vector<std::uint32_t> triangle_point_triangle;
 
     std::size_t triangle_point_count() const { return triangle_point.size() / 4; }
     std::size_t edge_edge_count() const { return edge_edge.size() / 4; }

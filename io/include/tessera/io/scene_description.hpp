@@ -38,7 +38,7 @@
 namespace tessera::io {
 
 /// Where a scene's geometry comes from.
-enum class SceneSource { cloth, bar, mesh };
+enum class SceneSource { cloth, bar, mesh, pile };
 
 /// Which particles a scene pins (inverse mass 0); see the top of this file.
 struct PinRule {
@@ -133,6 +133,8 @@ struct SceneDescription {
   /// which the pinned state hashes of cloth scenes assume).
   DiagonalPattern cloth_diagonals = DiagonalPattern::uniform;
   std::array<std::size_t, 3> bar_cells{4, 4, 20};
+  /// pile: the number of tetrahedral blocks (generators.hpp, make_pile).
+  std::size_t pile_bodies = 8;
   /// mesh: the file (any extension read_mesh knows).
   std::filesystem::path mesh_file;
   PinRule pins;

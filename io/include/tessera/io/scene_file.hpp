@@ -66,11 +66,16 @@ std::string describe_pin_rule(const PinRule& rule);
 
 /// Vertices per side of the "drape" scene.
 inline constexpr std::size_t kDrapeVertices = 128;
+/// Blocks of the "pile" scene, by default and at most.
+inline constexpr std::size_t kPileBodies = 8;
+inline constexpr std::size_t kMaxPileBodies = 4096;
 
 /// A scene on the command line: "cloth" (64 × 64 vertices), "cloth:N" (N × N),
 /// "cloth:CxR" (either followed by ":alternating" for chequerboard diagonals,
 /// DiagonalPattern::alternating), "drape" / "drape:N" (a free N × N cloth, 128 by default,
-/// falling onto a sphere and the ground with self-collision, 120 frames), "bar" (4 × 4 × 20
+/// falling onto a sphere and the ground with self-collision, 120 frames), "pile" / "pile:N"
+/// (N FEM blocks, 8 by default, dropped crosswise onto the ground and onto each other, 90
+/// frames), "bar" (4 × 4 × 20
 /// cells), "bar:XxYxZ", a path ending in .json (read as a
 /// scene file) or any other path (a mesh file, see read_mesh; not opened here). Sizes must be
 /// at least 2 vertices (cloth) or 1 cell (bar) per side, and at most 2^31 vertices in all.

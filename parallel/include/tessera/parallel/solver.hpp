@@ -230,9 +230,12 @@ class Solver {
   /// after the model's and the dynamic constraints in every iteration, as a Jacobi set of
   /// their own (mode sequential: one after another), with their velocity pass after the
   /// velocity update. `surface_triangles` (3 particles each, the user's numbering) is the
-  /// surface self-collision works on. Replaces an earlier stage; throws InvalidInput for bad
-  /// settings or a triangle naming a particle the model does not have.
-  void set_collisions(CollisionSettings settings, std::span<const std::uint32_t> surface_triangles);
+  /// surface self-collision works on; `tetrahedra` (4 each) are the solids, whose boundary
+  /// faces among those triangles get particle–tet contacts (solid_contacts.hpp). Replaces an
+  /// earlier stage; throws InvalidInput for bad settings or an element naming a particle the
+  /// model does not have.
+  void set_collisions(CollisionSettings settings, std::span<const std::uint32_t> surface_triangles,
+                      std::span<const std::uint32_t> tetrahedra = {});
   /// Turns collision detection off and drops the last contacts.
   void clear_collisions();
   /// The stage (its settings and statistics), or null.

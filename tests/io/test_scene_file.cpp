@@ -272,9 +272,9 @@ TEST(SceneFile, ErrorsNameTheKeyOrTheLine) {
             "scene.json: 'pins': unknown pin rule 'left' (known: default, none, lowest-x, "
             "lowest-y, lowest-z, highest-x, highest-y, highest-z)");
   EXPECT_EQ(json_error(R"({"generator": "sphere"})"),
-            "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"drape:N\", \"bar\" or \"bar:XxYxZ\", not \"sphere\"");
+            "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"drape:N\", \"pile:N\", \"bar\" or \"bar:XxYxZ\", not \"sphere\"");
   EXPECT_EQ(json_error(R"({"generator": "clothes.json"})"),
-            "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"drape:N\", \"bar\" or \"bar:XxYxZ\", not \"clothes.json\"");
+            "scene.json: 'generator' must be \"cloth\", \"cloth:CxR\", \"drape:N\", \"pile:N\", \"bar\" or \"bar:XxYxZ\", not \"clothes.json\"");
   EXPECT_EQ(json_error(R"({"generator": "cloth:1"})"),
             "scene.json: 'generator': scene 'cloth:1': a cloth needs at least 2 vertices per side");
   EXPECT_EQ(json_error(R"({"frames": 3})"),

@@ -5,6 +5,8 @@
 #include "frame_output.hpp"
 
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 #include <system_error>
 
 #include <tessera/core/error.hpp>
@@ -34,6 +36,7 @@ FrameOutput::FrameOutput(std::filesystem::path folder, const io::Scene& scene,
   }
 
   const ParticleState& particles = scene.model.particles;
+  particle_count_ = particles.size();
   inverse_mass_.resize(particles.size());
   for (std::size_t p = 0; p < particles.size(); ++p) inverse_mass_[p] = particles.inverse_mass[p];
 
@@ -80,10 +83,17 @@ void FrameOutput::add_constraint_cells(const Model& model, const Colouring* colo
     if (!cells->colour.empty()) cells_.push_back(std::move(*cells));
 }
 
-void FrameOutput::write(std::size_t frame, double time, std::span<const Vector3r> positions) {
+void FrameOutput::write(std::size_t frame, double time, std::span<const Vector3r> positions,
+                        std::span<const Real> contacts) {
   io::Frame data;
   data.positions = positions;
   data.point_data.emplace_back("inverse_mass", inverse_mass_);
+  if (!contacts.empty()) {
+    if (contacts.size() != particle_count_)
+      throw std::logic_error("FrameOutput: contact counts for " + std::to_string(contacts.size()) +
+                             " particles, the scene has " + std::to_string(particle_count_));
+    data.point_data.emplace_back("contacts", contacts);
+  }
   for (const Cells& cells : cells_) {
     io::CellBlock block{cells.type, cells.vertices, {}};
     block.cell_data.emplace_back("colour", cells.colour);
@@ -101,6 +111,18 @@ void FrameOutput::write(std::size_t frame, double time, std::span<const Vector3r
     io::write_obj(frame_file(folder_, frame, "obj"), data);
     ++files_written_;
   }
+}
+
+std::vector<Real> contacts_per_particle(const Solver& solver) {
+  std::vector<Real> counts(solver.particle_count(), 0);
+  const Schedule& schedule = solver.schedule();
+  solver.contacts().for_each([&](ConstraintFamily, const auto& batch) {
+    // Contacts are fixed-arity families (shape matching, with its clusters, never is one).
+    if constexpr (requires { batch.particles.particle; })
+      for (const auto& slot : batch.particles.particle)
+        for (std::size_t c = 0; c < batch.size(); ++c) counts[schedule.user_particle(slot[c])] += 1;
+  });
+  return counts;
 }
 
 }  // namespace tessera::cli

@@ -149,7 +149,9 @@ int run_command(const RunOptions& options) {
     solver.set_collisions(*collisions, when_self(scene.surface_triangles),
                           when_self(scene.mesh.tetrahedra));
 
-  if (output) output->write(0, 0.0, solver.positions());
+  if (output)
+    output->write(0, 0.0, solver.positions(),
+                  collisions ? std::vector<Real>(particles, Real(0)) : std::vector<Real>());
   Residual initial, final;
   if (simulation.frames == 0) initial = final = solver.residual();
   {
@@ -157,7 +159,9 @@ int run_command(const RunOptions& options) {
     for (std::size_t frame = 1; frame <= simulation.frames; ++frame) {
       solver.step();
       if (frame == 1) initial = solver.last_step().residual_before;
-      if (output) output->write(frame, double(frame) * double(simulation.time_step), solver.positions());
+      if (output)
+        output->write(frame, double(frame) * double(simulation.time_step), solver.positions(),
+                      collisions ? contacts_per_particle(solver) : std::vector<Real>());
       progress.update(frame);
     }
   }

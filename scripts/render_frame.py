@@ -3,8 +3,10 @@
 
     /usr/bin/python3 scripts/render_frame.py DIR/frame_00060.vtu picture.png [--family N]
 
-Left: the surface (grey, lit by its normals). Right: the constraints of one family (default 0,
-distance) drawn as lines in their colour, so the colouring is seen on the deformed mesh.
+Left: the surface (grey, lit by its normals); in a run with collisions, the particles held by a
+contact in the frame's last substep as red dots (point data "contacts"). Right: the
+constraints of one family (default 0, distance) drawn as lines in their colour, so the
+colouring is seen on the deformed mesh.
 Uses Debian's python3-matplotlib (scripts/setup --bench installs it); reads the ASCII .vtu
 with the standard library's XML parser.
 """
@@ -32,7 +34,7 @@ def read_vtu(path):
     for end in arrays["offsets"]:
         cells.append(arrays["connectivity"][start:end])
         start = end
-    return points, cells, arrays["types"], arrays.get("colour"), arrays.get("family")
+    return points, cells, arrays["types"], arrays.get("colour"), arrays.get("family"), arrays.get("contacts")
 
 
 def main():
@@ -43,7 +45,7 @@ def main():
     parser.add_argument("--title", default="")
     arguments = parser.parse_args()
 
-    points, cells, types, colours, families = read_vtu(arguments.vtu)
+    points, cells, types, colours, families, contacts = read_vtu(arguments.vtu)
     # View: x right, the model's y up (matplotlib's z), z into the page.
     view = [(x, z, y) for x, y, z in points]
     triangles = [[view[v] for v in cell] for cell, t, f in zip(cells, types, families) if t == 5 and f < 0]
@@ -68,7 +70,14 @@ def main():
                 light = abs(n[0] * 0.4 + n[1] * -0.5 + n[2] * 0.77) / length
                 shades.append((0.35 + 0.6 * light,) * 3)
             axes.add_collection3d(Poly3DCollection(triangles, facecolors=shades, edgecolors="none", linewidths=0, antialiased=False))
-            axes.set_title("simulated surface")
+            title = "simulated surface"
+            if contacts:
+                touching = [p for p, n in zip(view, contacts) if n > 0]
+                if touching:
+                    xs, ys, zs = zip(*touching)
+                    axes.scatter(xs, ys, zs, s=1.5, c="red", depthshade=False)
+                title += f", {len(touching)} particles in contact (red)"
+            axes.set_title(title)
         else:
             segments = [[cell[0], cell[-1]] for cell, _ in lines]
             axes.add_collection3d(Line3DCollection(

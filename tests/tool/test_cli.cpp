@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -207,6 +208,24 @@ TEST_F(Cli, PileBlocksLandOnEachOtherWithoutPenetration) {
   EXPECT_LE(a["penetration_max"].get<double>(), 0.005) << "at most the thickness deep";
   EXPECT_EQ(a["self_intersections"], 0);
   EXPECT_TRUE(a.contains("residual_particle_tet_contact_max_final"));
+  // --out: the frames carry each particle's contact count (point data "contacts").
+  const fs::path out = folder_ / "pile";
+  run_json({"run", "pile:3", "--frames", "12", "--out", out.string()});
+  const std::string vtu = slurp(out / "frame_00012.vtu");
+  const std::size_t name = vtu.find("Name=\"contacts\"");
+  ASSERT_NE(name, std::string::npos);
+  std::istringstream values(vtu.substr(vtu.find('>', name) + 1,
+                                       vtu.find("</DataArray>", name) - vtu.find('>', name) - 1));
+  std::size_t count = 0, touching = 0;
+  for (double value; values >> value; ++count) {
+    EXPECT_EQ(value, std::floor(value));
+    touching += value > 0;
+  }
+  EXPECT_EQ(count, 3u * 144u);
+  EXPECT_GT(touching, 10u) << "the blocks lie on the ground";
+  run_json({"run", "cloth:6", "--frames", "1", "--out", (folder_ / "cloth").string()});
+  EXPECT_EQ(slurp(folder_ / "cloth" / "frame_00001.vtu").find("contacts"), std::string::npos);
+
   const Json example = run_json(
       {"run", std::string(TESSERA_SOURCE_DIR) + "/examples/scenes/pile.json", "--frames", "1"});
   EXPECT_EQ(example["scene"], "pile");

@@ -15,6 +15,12 @@
 //   collision/self_intersections/folded128/threads:<T>   count_self_intersections
 //   collision/reference/distance_sweep/cloth128/threads:<T>   one gs projection sweep of the
 //       128² distance cloth: the yardstick of the detection's budget (about two sweeps)
+//   collision/stage_detect/pile/threads:<T>   CollisionStage::detect on the pile scene
+//       (`tessera run pile`, 8 FEM blocks, 1,152 particles) at frame 40, blocks lying on
+//       each other and the ground: collider contacts, self-collision pairs, their split into
+//       particle–tet contacts, the batches; counters particle_tet, collider, edge_edge
+//   collision/reference/sweep/pile/threads:<T>   one gs sweep of the pile's FEM tetrahedra
+//       and that substep's contacts, the yardstick for the pile
 //
 // Threads: 1 and 2, each run inside a tbb::task_arena of that many threads.
 #include <benchmark/benchmark.h>
@@ -25,10 +31,12 @@
 
 #include <tbb/task_arena.h>
 
+#include <tessera/collision/collision_stage.hpp>
 #include <tessera/collision/self_collision.hpp>
 #include <tessera/collision/self_intersections.hpp>
 #include <tessera/collision/spatial_hash.hpp>
 #include <tessera/io/generators.hpp>
+#include <tessera/io/scene_file.hpp>
 #include <tessera/parallel/solver.hpp>
 
 #include "scenes.hpp"
@@ -168,6 +176,79 @@ void BM_DistanceSweep(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * std::int64_t(model.constraints.size()));
 }
 BENCHMARK(BM_DistanceSweep)->Name("collision/reference/distance_sweep/cloth128")
+    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+/// The pile scene run to frame 40 (blocks resting on each other), its solver kept for the
+/// sweep and its state for detection.
+struct SettledPile {
+  io::Scene scene = io::build_scene(io::parse_scene_spec("pile"));
+  CollisionSettings collisions;
+  SolverSettings settings;
+  std::unique_ptr<Solver> solver;
+  ParticleState state;  // user numbering, previous = one substep back
+
+  SettledPile() {
+    collisions.colliders = {PlaneCollider{Vector3r(0, 1, 0), 0}};
+    collisions.self_collision = true;
+    settings.threads = 2;
+    settings.report_residuals = false;
+    solver = std::make_unique<Solver>(test::make_solver(scene.model, settings, "stencil"));
+    solver->set_collisions(collisions, scene.surface_triangles, scene.mesh.tetrahedra);
+    for (int frame = 0; frame < 40; ++frame) solver->step();
+    const std::vector<Vector3r> x = solver->positions(), v = solver->velocities();
+    const std::vector<Real> inverse_masses(
+        scene.model.particles.inverse_mass.begin(),
+        scene.model.particles.inverse_mass.begin() + std::ptrdiff_t(x.size()));
+    state = ParticleState(x, inverse_masses);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const Vector3r previous = x[i] - v[i] * substep();
+      state.previous_x[i] = previous.x(), state.previous_y[i] = previous.y(),
+      state.previous_z[i] = previous.z();
+      state.velocity_x[i] = v[i].x(), state.velocity_y[i] = v[i].y(), state.velocity_z[i] = v[i].z();
+    }
+  }
+  Real substep() const { return settings.time_step / Real(settings.substeps); }
+};
+
+SettledPile& settled_pile() {
+  static SettledPile pile;
+  return pile;
+}
+
+void BM_PileDetect(benchmark::State& state) {
+  SettledPile& pile = settled_pile();
+  in_arena(state, [&] {
+    CollisionStage stage(pile.collisions,
+                         std::vector<std::uint32_t>(pile.scene.surface_triangles.begin(),
+                                                    pile.scene.surface_triangles.end()),
+                         pile.state.size(), pile.scene.mesh.tetrahedra);
+    ConstraintSets contacts;
+    for (auto _ : state) stage.detect(pile.state, pile.substep(), Real(9.81), contacts);
+    state.counters["particle_tet"] = double(contacts.particle_tet_contact.size());
+    state.counters["collider"] = double(contacts.collider_contact.size());
+    state.counters["edge_edge"] = double(contacts.edge_edge_distance.size());
+  });
+}
+BENCHMARK(BM_PileDetect)->Name("collision/stage_detect/pile")
+    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+void BM_PileSweep(benchmark::State& state) {
+  SettledPile& pile = settled_pile();
+  SolverSettings settings = pile.settings;
+  settings.threads = std::size_t(state.range(0));
+  settings.check_finite = false;
+  Solver solver = test::make_solver(pile.scene.model, settings, "stencil");
+  solver.set_collisions(pile.collisions, pile.scene.surface_triangles, pile.scene.mesh.tetrahedra);
+  for (std::size_t i = 0; i < pile.state.size(); ++i) {
+    solver.set_position(ParticleIndex(i), pile.state.position(i));
+    solver.set_velocity(ParticleIndex(i), pile.state.velocity(i));
+  }
+  solver.step();  // a substep's contacts in place
+  for (auto _ : state) solver.project(1, pile.substep());
+  state.SetItemsProcessed(state.iterations() *
+                          std::int64_t(pile.scene.model.constraints.size() + solver.contacts().size()));
+}
+BENCHMARK(BM_PileSweep)->Name("collision/reference/sweep/pile")
     ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
 }  // namespace

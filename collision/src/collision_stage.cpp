@@ -114,9 +114,13 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
     if (statistics_.substeps % interval == 0) {
       // Half a thickness of reach beyond the contact distance: the detection already adds
       // each pair's motion over the interval's substeps (self_collision.hpp).
+      // A surface made only of solids' faces has no edge pair to keep (solid_contacts.hpp):
+      // its edge–edge search, three quarters of a detection, is skipped.
+      const bool all_solid = buffers.solids && buffers.solids->solid_face_count() * 3 == triangles_.size();
       const SelfCollisionSettings self{.thickness = settings_.thickness,
                                        .margin = settings_.thickness / 2,
                                        .stiffness = settings_.self_stiffness,
+                                       .edge_edge = !all_solid,
                                        .motion_scale = Real(interval)};
       buffers.self->detect(state, self, buffers.self_contacts);
       if (buffers.solids) {

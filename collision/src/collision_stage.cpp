@@ -111,31 +111,39 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
 
   if (buffers.self) {
     const std::size_t interval = settings_.self_collision_interval;
-    if (statistics_.substeps % interval == 0) {
-      // Half a thickness of reach beyond the contact distance: the detection already adds
-      // each pair's motion over the interval's substeps (self_collision.hpp).
-      // A surface made only of solids' faces has no edge pair to keep (solid_contacts.hpp):
-      // its edge–edge search, three quarters of a detection, is skipped.
-      const bool all_solid = buffers.solids && buffers.solids->solid_face_count() * 3 == triangles_.size();
-      const SelfCollisionSettings self{.thickness = settings_.thickness,
-                                       .margin = settings_.thickness / 2,
-                                       .stiffness = settings_.self_stiffness,
-                                       .edge_edge = !all_solid,
-                                       .motion_scale = Real(interval)};
+    // Half a thickness of reach beyond the contact distance: the detection adds each pair's
+    // motion (self_collision.hpp). A surface made only of solids' faces has no edge pair to
+    // keep (solid_contacts.hpp): its edge–edge search, three quarters of a detection, is
+    // skipped.
+    const bool all_solid =
+        buffers.solids && buffers.solids->solid_face_count() * 3 == triangles_.size();
+    SelfCollisionSettings self{.thickness = settings_.thickness,
+                               .margin = settings_.thickness / 2,
+                               .stiffness = settings_.self_stiffness,
+                               .edge_edge = !all_solid,
+                               .motion_scale = Real(interval)};
+    if (interval == 1) {
       buffers.self->detect(state, self, buffers.self_contacts);
-      if (buffers.solids) {
-        // Vertex–face pairs of solids become particle–tet contacts; the rest stay distances.
-        // Edge pairs of two solids are dropped (solid_contacts.hpp).
-        split_solid_contacts(*buffers.solids, buffers.self_contacts, state, settings_.thickness,
-                             settings_.dynamic_friction, buffers.distance_contacts,
-                             buffers.solid_constraints);
-        buffers.self_contacts.triangle_point.swap(buffers.distance_contacts);
-        buffers.self_contacts.triangle_point_triangle.clear();
-        drop_solid_edge_pairs(*buffers.solids, buffers.self_contacts.edge_edge);
-      }
-      buffers.self_constraints =
-          make_self_collision_constraints(buffers.self_contacts, state.size(), self);
+    } else {
+      // The grids every `interval` substeps, reaching as far as that many substeps' motion;
+      // every substep the pairs they found are tested again at this substep's positions.
+      if (statistics_.substeps % interval == 0)
+        buffers.self->detect(state, self, buffers.self_contacts);
+      self.motion_scale = 1;
+      buffers.self->refine(state, self, buffers.self_contacts);
     }
+    if (buffers.solids) {
+      // Vertex–face pairs of solids become particle–tet contacts; the rest stay distances.
+      // Edge pairs of two solids are dropped (solid_contacts.hpp).
+      split_solid_contacts(*buffers.solids, buffers.self_contacts, state, settings_.thickness,
+                           settings_.dynamic_friction, buffers.distance_contacts,
+                           buffers.solid_constraints);
+      buffers.self_contacts.triangle_point.swap(buffers.distance_contacts);
+      buffers.self_contacts.triangle_point_triangle.clear();
+      drop_solid_edge_pairs(*buffers.solids, buffers.self_contacts.edge_edge);
+    }
+    buffers.self_constraints =
+        make_self_collision_constraints(buffers.self_contacts, state.size(), self);
     contacts.triangle_point_distance = buffers.self_constraints.triangle_point;
     contacts.edge_edge_distance = buffers.self_constraints.edge_edge;
     statistics_.vertex_triangle_contacts = buffers.self_contacts.triangle_point_count();

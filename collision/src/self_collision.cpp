@@ -125,8 +125,8 @@ SelfCollision::SelfCollision(SelfCollision&&) noexcept = default;
 SelfCollision& SelfCollision::operator=(SelfCollision&&) noexcept = default;
 SelfCollision::~SelfCollision() = default;
 
-void SelfCollision::detect(const SelfCollisionPositions& positions,
-                           const SelfCollisionSettings& settings, Contacts& out) {
+void SelfCollision::check(const SelfCollisionPositions& positions,
+                          const SelfCollisionSettings& settings) const {
   if (positions.count != particle_count_)
     throw InvalidInput("self collision: " + std::to_string(positions.count) +
                        " particles given for a mesh of " + std::to_string(particle_count_));
@@ -136,7 +136,25 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
     throw InvalidInput("self collision: margin must be finite and not negative");
   if (!(settings.motion_scale >= 1) || !std::isfinite(settings.motion_scale))
     throw InvalidInput("self collision: motion scale must be finite and at least 1");
-  const Real reach = settings.thickness + settings.margin;
+}
+
+SelfCollision::Reach SelfCollision::compute_motion(const SelfCollisionPositions& positions,
+                                                   const SelfCollisionSettings& settings) {
+  const Particles particles{positions};
+  motion_.resize(particle_count_);
+  const Real motion_scale = settings.motion_scale;
+  parallel_over(particle_count_, [&](std::size_t i) {
+    motion_[i] = motion_scale * (Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
+                                 particles.start(std::uint32_t(i)))
+                                    .norm();
+  });
+  return {settings.thickness + settings.margin};
+}
+
+void SelfCollision::detect(const SelfCollisionPositions& positions,
+                           const SelfCollisionSettings& settings, Contacts& out) {
+  check(positions, settings);
+  const Real reach = compute_motion(positions, settings).distance;
   const Particles particles{positions};
   const std::size_t triangle_count = triangles_.size() / 3;
   const std::size_t edge_count = edges_.size() / 2;
@@ -146,13 +164,6 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
   // start below reach + the two motions) has overlapping boxes, since no coordinate differs
   // by more than the distance; so the grid misses no contact, and the boxes hold the swept
   // motion as well.
-  motion_.resize(particle_count_);
-  const Real motion_scale = settings.motion_scale;
-  parallel_over(particle_count_, [&](std::size_t i) {
-    motion_[i] = motion_scale * (Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
-                                 particles.start(std::uint32_t(i)))
-                                    .norm();
-  });
   vertex_boxes_.resize(particle_count_);
   parallel_over(particle_count_, [&](std::size_t i) {
     const std::uint32_t ids[1] = {std::uint32_t(i)};
@@ -220,6 +231,12 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
       },
       edge_edge_pairs_);
 
+  candidate_triangle_point_ = triangle_point_pairs_;
+  candidate_edge_edge_ = edge_edge_pairs_;
+  emit(out);
+}
+
+void SelfCollision::emit(Contacts& out) const {
   out.triangle_point.resize(4 * triangle_point_pairs_.size());
   out.triangle_point_triangle.resize(triangle_point_pairs_.size());
   parallel_over(triangle_point_pairs_.size(), [&](std::size_t k) {
@@ -236,6 +253,43 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
     std::copy_n(edges_.data() + 2 * std::size_t(e), 2, contact);
     std::copy_n(edges_.data() + 2 * std::size_t(f), 2, contact + 2);
   });
+}
+
+void SelfCollision::refine(const SelfCollisionPositions& positions,
+                           const SelfCollisionSettings& settings, Contacts& out) {
+  check(positions, settings);
+  const Reach reach = compute_motion(positions, settings);
+  const Particles particles{positions};
+  // The candidates of the last detection, filtered by the contact rule at this substep's
+  // start positions and motions; their order (sorted by key) is kept.
+  chunks_->triangle_point.run(
+      candidate_triangle_point_.size(),
+      [&](std::size_t k, std::vector<Pair>& buffer) {
+        const Pair pair = candidate_triangle_point_[k];
+        const std::uint32_t p = pair.first, t = pair.second;
+        const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
+        const Real within = reach.distance + motion_[p] + std::max({motion_[a], motion_[b], motion_[c]});
+        if (detail::squared_point_triangle_distance(particles.start(p), particles.start(a),
+                                                    particles.start(b), particles.start(c)) <
+            within * within)
+          buffer.push_back(pair);
+      },
+      triangle_point_pairs_);
+  chunks_->edge_edge.run(
+      settings.edge_edge ? candidate_edge_edge_.size() : 0,
+      [&](std::size_t k, std::vector<Pair>& buffer) {
+        const Pair pair = candidate_edge_edge_[k];
+        const std::uint32_t p0 = edges_[2 * pair.first], p1 = edges_[2 * pair.first + 1];
+        const std::uint32_t p2 = edges_[2 * pair.second], p3 = edges_[2 * pair.second + 1];
+        const Real within = reach.distance + std::max(motion_[p0], motion_[p1]) +
+                            std::max(motion_[p2], motion_[p3]);
+        if (detail::squared_segment_distance(particles.start(p0), particles.start(p1),
+                                             particles.start(p2), particles.start(p3)) <
+            within * within)
+          buffer.push_back(pair);
+      },
+      edge_edge_pairs_);
+  emit(out);
 }
 
 SelfCollisionConstraints make_self_collision_constraints(const SelfCollision::Contacts& contacts,

@@ -248,6 +248,41 @@ TEST(SelfCollision, AFoldedClothHasExactlyTheBruteForceContacts) {
   EXPECT_EQ(contacts.edge_edge, expected.edge_edge);
 }
 
+TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContacts) {
+  // The folded cloth's top layer moves down at a constant 0.05 h per substep; a detection
+  // reaching four substeps' motion, refined at each of the four, lists what a detection at
+  // that substep finds (and no more).
+  FoldedCloth cloth(24);
+  ParticleState& s = cloth.state;
+  for (std::size_t i = 0; i < s.size(); ++i)  // the bottom layer and the fold stay still
+    if (s.y[i] < Real(0.4) * cloth.spacing()) s.previous_y[i] = s.y[i];
+  SelfCollision once(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
+  SelfCollisionSettings settings{Real(0.4) * cloth.spacing(), Real(0.1) * cloth.spacing()};
+  settings.motion_scale = 4;
+  Contacts candidates, refined, direct;
+  once.detect(s, settings, candidates);
+  settings.motion_scale = 1;
+  std::size_t changes = 0;
+  std::vector<ParticleIndex> previous_list;
+  for (int substep = 0; substep < 4; ++substep) {
+    once.refine(s, settings, refined);
+    every.detect(s, settings, direct);
+    EXPECT_EQ(refined.triangle_point, direct.triangle_point) << substep;
+    EXPECT_EQ(refined.triangle_point_triangle, direct.triangle_point_triangle) << substep;
+    EXPECT_EQ(refined.edge_edge, direct.edge_edge) << substep;
+    EXPECT_LE(refined.triangle_point_count(), candidates.triangle_point_count());
+    changes += refined.triangle_point != previous_list;
+    previous_list = refined.triangle_point;
+    for (std::size_t i = 0; i < s.size(); ++i) {  // one more substep of the same motion
+      const Real step = s.y[i] - s.previous_y[i];
+      s.previous_y[i] = s.y[i];
+      s.y[i] += step;
+    }
+  }
+  EXPECT_GE(changes, 2u) << "the contacts change as the layers approach";
+  EXPECT_GT(candidates.triangle_point_count(), direct.triangle_point_count());
+}
+
 TEST(SelfCollision, AFlatClothAtRestHasNoContact) {
   const io::ClothGrid grid = io::make_cloth_grid(32, 32, Real(1) / 31);
   const ParticleState state(grid.positions, std::vector<Real>(grid.vertex_count(), 1));

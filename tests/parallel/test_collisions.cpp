@@ -196,6 +196,71 @@ TEST(Collisions, ABlockDroppedOnABlockRestsOnItWithoutPenetrationTheSameOnAnyThr
   }
 }
 
+/// Two free 12 × 12 cloths 1 m wide: one lying on the ground (y = 0) a thickness above it,
+/// the other 4 cm above, shifted by half a cell, falling onto it; both sliding along x at
+/// 2 m/s on a frictionless ground (so every particle moves 2 mm per substep).
+struct TwoLayers {
+  Model model;
+  std::vector<std::uint32_t> triangles;
+  CollisionSettings collisions;
+
+  TwoLayers() {
+    const std::size_t n = 12;
+    const Real h = Real(1) / Real(n - 1);
+    const io::ClothGrid grid = io::make_cloth_grid(n, n, h);
+    std::vector<Vector3r> positions;
+    std::vector<ParticleIndex> edges;
+    for (int layer = 0; layer < 2; ++layer) {
+      const std::uint32_t first = std::uint32_t(positions.size());
+      for (const Vector3r& p : grid.positions)
+        positions.push_back(layer == 0 ? Vector3r(p.x(), Real(0.005), p.y())
+                                       : Vector3r(p.x() + h / 2, Real(0.045), p.y() + h / 2));
+      for (const auto v : grid.triangle_indices) triangles.push_back(first + v);
+      for (const auto v : grid.edge_indices) edges.push_back(first + v);
+    }
+    model.particles = ParticleState(positions, std::vector<Real>(positions.size(), Real(1)));
+    model.constraints.distance = make_distance_constraints({edges, positions, Real(1), Real(0)});
+    collisions.colliders = {PlaneCollider{Vector3r(0, 1, 0), 0}};
+    collisions.thickness = Real(0.005);
+    collisions.static_friction = collisions.dynamic_friction = 0;
+    collisions.self_collision = true;
+  }
+};
+
+TEST(Collisions, SelfContactsFoundEveryFourSubstepsAndRefinedEachSubstepStayAsTight) {
+  // The grids built every 4th substep: each substep still tests the pairs found against its
+  // own positions, so as many self-contacts per substep as when detecting every substep,
+  // and the upper cloth ends on the lower just the same.
+  const TwoLayers layers;
+  const auto run = [&](std::size_t interval, std::size_t threads) {
+    CollisionSettings collisions = layers.collisions;
+    collisions.self_collision_interval = interval;
+    Solver solver = make_solver(layers.model, drape_settings(SolverMode::gs, threads));
+    solver.set_collisions(collisions, layers.triangles);
+    for (std::size_t i = 0; i < layers.model.particles.size(); ++i)
+      solver.set_velocity(ParticleIndex(i), Vector3r(2, 0, 0));
+    double self_contacts = 0;
+    for (int frame = 0; frame < 30; ++frame) {
+      solver.step();
+      const CollisionStatistics& found = solver.collisions()->statistics();
+      self_contacts += double(found.vertex_triangle_contacts + found.edge_edge_contacts);
+    }
+    return std::pair(solver.positions(), self_contacts / 30);
+  };
+  const auto [every, every_contacts] = run(1, 2);
+  const auto [fourth, fourth_contacts] = run(4, 2);
+  EXPECT_GT(every_contacts, 100);
+  // Keeping the 4-substep list instead gave 3.9 % more here (1,684 against 1,622).
+  EXPECT_NEAR(fourth_contacts, every_contacts, 0.01 * every_contacts);
+  EXPECT_EQ(count_self_intersections(fourth, layers.triangles), 0u);
+  const std::size_t half = fourth.size() / 2;
+  for (std::size_t i = 0; i < half; ++i) {
+    EXPECT_GE(fourth[i].y(), Real(0.004)) << "on the ground";
+    EXPECT_GE(fourth[half + i].y(), fourth[i].y() + Real(0.004)) << "the upper cloth on the lower";
+  }
+  EXPECT_TRUE(same_bits(fourth, run(4, 1).first)) << "1 and 2 threads";
+}
+
 /// A solver of one free particle at `start` (mode gs, default gravity).
 Solver one_particle(const Vector3r& start, std::size_t substeps, std::size_t iterations) {
   Model model;

@@ -134,6 +134,18 @@ class SelfCollision {
     detect(SelfCollisionPositions::of(state), settings, out);
   }
 
+  /// The contacts of this substep among the pairs the last detect() found: each pair
+  /// tested again by the contact rule at `positions` (start and predicted), in the same order.
+  /// With a detection made with motion_scale = k, this gives every substep of the next k
+  /// the list a detection of its own would give, as long as no particle moves faster than
+  /// at that detection: the grids are built once per k substeps, and the list stays as
+  /// tight as one found every substep. Same errors as detect().
+  void refine(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings,
+              Contacts& out);
+  void refine(const ParticleState& state, const SelfCollisionSettings& settings, Contacts& out) {
+    refine(SelfCollisionPositions::of(state), settings, out);
+  }
+
   std::size_t particle_count() const { return particle_count_; }
   std::span<const std::uint32_t> triangles() const { return triangles_; }
   /// Two particles per unique edge (lower first), sorted.
@@ -143,6 +155,15 @@ class SelfCollision {
   struct Pair {
     std::uint32_t first, second;
   };
+  struct Reach {
+    Real distance;  // thickness + margin
+  };
+  void check(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings) const;
+  /// Each particle's motion over the substep × settings.motion_scale, into motion_.
+  Reach compute_motion(const SelfCollisionPositions& positions,
+                       const SelfCollisionSettings& settings);
+  /// The pairs as the particle lists of `out`.
+  void emit(Contacts& out) const;
 
   std::size_t particle_count_;
   std::vector<std::uint32_t> triangles_;
@@ -152,6 +173,8 @@ class SelfCollision {
   std::vector<Aabb> vertex_boxes_, triangle_boxes_, edge_boxes_;
   UniformGrid triangle_grid_, edge_grid_;
   std::vector<Pair> triangle_point_pairs_, edge_edge_pairs_;
+  // The last detection's pairs, which refine() filters.
+  std::vector<Pair> candidate_triangle_point_, candidate_edge_edge_;
   struct Chunks;  // the parallel loops' per-chunk buffers (chunked_output.hpp)
   std::unique_ptr<Chunks> chunks_;
 };

@@ -8,6 +8,9 @@
 //       triangle_point and edge_edge (contacts found)
 //   collision/self_detect_vertex_triangle/folded128/threads:<T>   the same without edge–edge
 //       contacts (SelfCollisionSettings::edge_edge = false)
+//   collision/self_refine/folded128/threads:<T>   SelfCollision::refine after a detection
+//       reaching 4 substeps' motion: the per-substep cost between detections with
+//       self_collision_interval = 4 (the candidates tested again, no grid)
 //   collision/broad_vertices/folded128/threads:<T>    the grid's candidate pairs of the vertices
 //       as points within 2r (r = thickness + margin): build + self_pairs
 //   collision/broad_triangles/folded128/threads:<T>   the same for the triangles' boxes grown by
@@ -108,6 +111,24 @@ BENCHMARK_CAPTURE(BM_SelfDetect, all, true)->Name("collision/self_detect/folded1
 BENCHMARK_CAPTURE(BM_SelfDetect, vertex_triangle, false)
     ->Name("collision/self_detect_vertex_triangle/folded128")->ArgName("threads")->Arg(1)->Arg(2)
     ->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+void BM_SelfRefine(benchmark::State& state) {
+  const FoldedCloth& cloth = folded();
+  SelfCollisionSettings settings = cloth.settings();
+  in_arena(state, [&] {
+    SelfCollision collision(cloth.grid.triangle_indices, cloth.state.size());
+    SelfCollision::Contacts contacts;
+    settings.motion_scale = 4;
+    collision.detect(cloth.state, settings, contacts);
+    const double candidates = double(contacts.triangle_point_count() + contacts.edge_edge_count());
+    settings.motion_scale = 1;
+    for (auto _ : state) collision.refine(cloth.state, settings, contacts);
+    state.counters["candidates"] = candidates;
+    state.counters["contacts"] = double(contacts.triangle_point_count() + contacts.edge_edge_count());
+  });
+}
+BENCHMARK(BM_SelfRefine)->Name("collision/self_refine/folded128")
+    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
 void run_broad_phase(benchmark::State& state, const std::vector<Aabb>& boxes) {
   in_arena(state, [&] {

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <tessera/collision/collision_stage.hpp>
 #include <tessera/core/error.hpp>
 
 namespace tessera::io {
@@ -174,6 +175,13 @@ TEST(SceneSpec, PileIsBlocksDroppedOntoTheGroundAndOntoEachOther) {
   }
   for (const Vector3r& p : scene.mesh.positions) EXPECT_GT(p.y(), Real(0.01));
   EXPECT_EQ(scene.surface_triangles.size(), 3u * 2 * 2 * (3 * 3 + 3 * 8 + 3 * 8) * 3);
+}
+
+TEST(SceneFile, TheSelfCollisionIntervalDefaultsToTheStages) {
+  EXPECT_EQ(SceneDescription{}.collisions.self_collision_interval, kDefaultSelfCollisionInterval);
+  EXPECT_EQ(from_json(R"({"generator": "cloth:8", "self_collision_interval": 1})")
+                .collisions.self_collision_interval,
+            1u);
 }
 
 TEST(SceneFile, CollidersAndContactKeys) {

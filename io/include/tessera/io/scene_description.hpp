@@ -90,8 +90,9 @@ struct CollisionDescription {
   Real dynamic_friction = Real(0.3);
   Real restitution = 0;
   bool self_collision = false;
-  /// Substeps between self-collision detections (CollisionSettings::self_collision_interval).
-  std::size_t self_collision_interval = 1;
+  /// Substeps between self-collision grid builds, each substep refining their pairs
+  /// (CollisionSettings::self_collision_interval; its default, kDefaultSelfCollisionInterval).
+  std::size_t self_collision_interval = 4;
 
   bool enabled() const { return self_collision || !colliders.empty(); }
 };

@@ -110,6 +110,24 @@ SolidSurface::SolidSurface(std::span<const std::uint32_t> tetrahedra,
   }
 }
 
+namespace {
+
+/// Whether p's projection on the plane of (a, b, c) (unit normal n) lies in the triangle, up
+/// to a sliver of 1e-3 of its size: the signed areas of the three sub-triangles.
+bool projects_inside(const Vector3r& p, const Vector3r& a, const Vector3r& b, const Vector3r& c,
+                     const Vector3r& n) {
+  const Vector3r q = p - n * n.dot(p - a);
+  const Real area = (b - a).cross(c - a).dot(n);
+  if (!(std::abs(area) > 0)) return false;
+  const Real tolerance = Real(-1e-3) * std::abs(area);
+  const Real sign = area > 0 ? Real(1) : Real(-1);
+  return sign * (b - q).cross(c - q).dot(n) >= tolerance &&
+         sign * (c - q).cross(a - q).dot(n) >= tolerance &&
+         sign * (a - q).cross(b - q).dot(n) >= tolerance;
+}
+
+}  // namespace
+
 void split_solid_contacts(const SolidSurface& surface, const SelfCollision::Contacts& contacts,
                           const ParticleState& state, Real thickness, Real friction,
                           std::vector<ParticleIndex>& remaining_triangle_point,
@@ -144,11 +162,18 @@ void split_solid_contacts(const SolidSurface& surface, const SelfCollision::Cont
       const auto start_edges = frame(sa, sb, sc, sd);
       const auto edges = frame(position(state, a), position(state, b), position(state, c),
                                position(state, d));
+      Vector3r face_normal = (sb - sa).cross(sc - sa).normalized();
+      if (face_normal.dot(sd - sa) > 0) face_normal = -face_normal;  // away from d
+      const Vector3r closest = detail::closest_point_on_triangle(sp, sa, sb, sc);
+      // See "Which normal" in solid_contacts.hpp: the face's in front of it, the direction
+      // from the closest edge point beside it, nothing behind its plane beside it.
+      Vector3r n = face_normal;
+      if (!projects_inside(sp, sa, sb, sc, face_normal)) {
+        const Vector3r away = sp - closest;
+        if (!(face_normal.dot(away) > 0) || !(away.norm() > Real(1e-6))) continue;
+        n = away.normalized();
+      }
       if (start_edges && edges) {
-        Vector3r face_normal = (sb - sa).cross(sc - sa).normalized();
-        if (face_normal.dot(sd - sa) > 0) face_normal = -face_normal;  // away from d
-        const Vector3r closest = detail::closest_point_on_triangle(sp, sa, sb, sc);
-        const Vector3r n = face_normal;  // see "Which normal" in solid_contacts.hpp
         // The closest point moves with the tetrahedron (its coordinates at the start); the
         // contact point is the thickness beyond it along n, in the predicted tetrahedron.
         const Vector3r weights =

@@ -18,7 +18,7 @@ struct RunOptions {
   SceneOptions scene;
   std::optional<std::size_t> frames, substeps, iterations, threads;
   std::optional<double> time_step, velocity_damping, divergence_rms, chebyshev_rho;
-  std::optional<std::string> strategy, mode, sequential_order, out, chebyshev;
+  std::optional<std::string> strategy, mode, sequential_order, out, chebyshev, contact_scheduling;
   bool write_obj = false;
   bool balance = false;
   bool json = false;

@@ -52,6 +52,7 @@ io::SimulationSettings simulation_of(const io::SceneDescription& scene, const Ru
   if (options.strategy) simulation.strategy = *options.strategy;
   if (options.mode) simulation.mode = *options.mode;
   if (options.sequential_order) simulation.sequential_order = *options.sequential_order;
+  if (options.contact_scheduling) simulation.contact_scheduling = *options.contact_scheduling;
   if (options.divergence_rms) simulation.divergence_rms = Real(*options.divergence_rms);
   return simulation;
 }
@@ -80,6 +81,9 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
   command->add_option("--sequential-order", options.sequential_order,
                       "mode sequential: groups (the reference library's greedy groups one after "
                       "another, default) or input");
+  command->add_option("--contact-scheduling", options.contact_scheduling,
+                      "modes gs and hybrid: jacobi (the contacts as one Jacobi set) or coloured "
+                      "(first-fit on top of the static colours) (default jacobi)");
   command->add_option("--divergence-rms", options.divergence_rms,
                       "a step that ends with an RMS residual above this fails (default 10; inf "
                       "turns the check off)")
@@ -205,6 +209,17 @@ int run_command(const RunOptions& options) {
     summary.add("contacts_mean", found.contacts_mean());
     summary.add("contacts_max", found.contacts_max);
     summary.add("seconds_collision", found.seconds_detection);
+    const SolverStatistics& statistics = solver.statistics();
+    summary.add("contact_scheduling",
+                std::string(contact_scheduling_name(solver.settings().contact_scheduling)));
+    summary.add("seconds_contact_scheduling", statistics.seconds_contact_scheduling);
+    if (solver.settings().contact_scheduling == ContactScheduling::coloured &&
+        statistics.contact_substeps != 0) {
+      summary.add("contact_colours_mean", double(statistics.contact_colours_total) /
+                                              double(statistics.contact_substeps));
+      summary.add("contact_colours_max", statistics.contact_colours_max);
+      summary.add("contacts_overflowed", statistics.contacts_overflowed);
+    }
     // The deepest point inside a collider or inside another solid body.
     summary.add("penetration_max",
                 double(std::max(penetration_depth(stage->settings().colliders, positions),

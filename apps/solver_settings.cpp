@@ -14,6 +14,8 @@ SolverSettings solver_settings(const io::SimulationSettings& simulation) {
   settings.velocity_damping = simulation.velocity_damping;
   settings.sequential_order = parse_sequential_order(simulation.sequential_order);
   settings.divergence_rms = simulation.divergence_rms;
+  if (simulation.contact_scheduling)
+    settings.contact_scheduling = parse_contact_scheduling(*simulation.contact_scheduling);
   if (simulation.chebyshev) settings.chebyshev = *simulation.chebyshev;
   if (simulation.chebyshev_rho) settings.chebyshev_rho = *simulation.chebyshev_rho;
   return settings;

@@ -306,7 +306,7 @@ SceneDescription describe(const Json& json, const std::string& name,
                "iterations", "frames", "velocity_damping", "chebyshev", "chebyshev_rho",
                "strategy", "mode", "sequential_order", "divergence_rms", "threads",
                "colliders", "thickness", "friction", "dynamic_friction", "restitution",
-               "self_collision", "self_collision_interval"});
+               "self_collision", "self_collision_interval", "contact_scheduling"});
   const Json* generator = reader.find("generator");
   const Json* mesh = reader.find("mesh");
   if ((generator != nullptr) == (mesh != nullptr))
@@ -374,6 +374,8 @@ SceneDescription describe(const Json& json, const std::string& name,
   reader.read_string("strategy", simulation.strategy);
   reader.read_string("mode", simulation.mode);
   reader.read_string("sequential_order", simulation.sequential_order);
+  if (std::string scheduling; reader.read_string("contact_scheduling", scheduling))
+    simulation.contact_scheduling = scheduling;
   reader.read_real("divergence_rms", simulation.divergence_rms, 0, false);
   reader.read_count("threads", simulation.threads, 0);
   return description;

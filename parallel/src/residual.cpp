@@ -15,9 +15,10 @@ namespace tessera {
 
 namespace detail {
 
-std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
-                                           const ConstraintSets& dynamic,
-                                           const ConstraintSets& contacts, std::size_t chunk) {
+std::vector<ResidualRange> residual_ranges(
+    const Schedule& schedule, const ConstraintSets& dynamic, const ConstraintSets& contacts,
+    const std::array<std::vector<ScheduleBlock>, kConstraintFamilyCount>& contact_colour_ranges,
+    std::size_t chunk) {
   std::vector<ResidualRange> ranges;
   const auto add = [&](ConstraintFamily family, ResidualRange::Set set, std::size_t begin,
                        std::size_t end) {
@@ -33,6 +34,8 @@ std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
     add(ConstraintFamily(f), ResidualRange::jacobi, 0, jacobi_sizes[f]);
     add(ConstraintFamily(f), ResidualRange::dynamic, 0, dynamic_sizes[f]);
     add(ConstraintFamily(f), ResidualRange::contacts, 0, contact_sizes[f]);
+    for (const ScheduleBlock& r : contact_colour_ranges[f])
+      add(r.family, ResidualRange::contact_colours, r.begin, r.end);
   }
   return ranges;
 }

@@ -17,7 +17,7 @@ namespace tessera::detail {
 /// Constraints [begin, end) of one family of the coloured batches, the Jacobi set or the
 /// dynamic constraints.
 struct ResidualRange {
-  enum Set : std::uint8_t { coloured, jacobi, dynamic, contacts };
+  enum Set : std::uint8_t { coloured, jacobi, dynamic, contacts, contact_colours };
   ConstraintFamily family;
   Set set;
   std::uint32_t begin;
@@ -41,11 +41,13 @@ struct WorstPlace {
 /// The longest range residual_of_range takes (its values live on the stack).
 inline constexpr std::size_t kLongestResidualRange = 2048;
 
-/// Every real constraint of the schedule and of `dynamic`, in ranges of at most `chunk`
-/// (≤ kLongestResidualRange) constraints.
-std::vector<ResidualRange> residual_ranges(const Schedule& schedule,
-                                           const ConstraintSets& dynamic,
-                                           const ConstraintSets& contacts, std::size_t chunk);
+/// Every real constraint of the schedule, of `dynamic`, of the contacts' Jacobi set and of
+/// the coloured contacts' real ranges, in ranges of at most `chunk` (≤ kLongestResidualRange)
+/// constraints.
+std::vector<ResidualRange> residual_ranges(
+    const Schedule& schedule, const ConstraintSets& dynamic, const ConstraintSets& contacts,
+    const std::array<std::vector<ScheduleBlock>, kConstraintFamilyCount>& contact_colour_ranges,
+    std::size_t chunk);
 
 /// The partial sums of one range, at `particles`: of the XPBD residual C + α̃λ of the XPBD
 /// families with α̃ = compliance / compliance_dt² when compliance_dt > 0 (compliance

@@ -20,6 +20,8 @@
 #include <tessera/core/sequential_projection.hpp>
 #include <tessera/parallel/threads.hpp>
 
+#include "batch_reorder.hpp"
+#include "contact_colouring.hpp"
 #include "jacobi_set.hpp"
 #include "residual_sum.hpp"
 
@@ -199,11 +201,44 @@ void Solver::JacobiWork::bind(const JacobiSet& jacobi) {
   z.assign(jacobi.incidence_count, 0);
 }
 
+bool Solver::colours_contacts() const {
+  return settings_.contact_scheduling == ContactScheduling::coloured &&
+         (settings_.mode == SolverMode::gs || settings_.mode == SolverMode::hybrid);
+}
+
 void Solver::build_stages() {
-  stages_.assign(schedule_.iteration_stages().begin(), schedule_.iteration_stages().end());
+  stages_.clear();
   velocity_stages_.assign(schedule_.velocity_stages().begin(), schedule_.velocity_stages().end());
-  // The dynamic constraints, then the contacts: each a set swept after the schedule's.
-  for (const StageSet set : {StageSet::dynamic, StageSet::contacts}) {
+  // Contact colour k right after coloured phase k (contact_colouring.hpp).
+  const std::size_t contact_colours = contact_colours_ ? contact_colours_->colour_count() : 0;
+  const auto contact_colour_stage = [&](std::size_t k) {
+    return Stage{StageKind::coloured_phase, StageSet::contact_colours,
+                 contact_colours_->colour_offsets[k], contact_colours_->colour_offsets[k + 1]};
+  };
+  std::size_t next_colour = 0;
+  for (const Stage& stage : schedule_.iteration_stages()) {
+    stages_.push_back(stage);
+    if (stage.kind == StageKind::coloured_phase && next_colour < contact_colours)
+      stages_.push_back(contact_colour_stage(next_colour++));
+  }
+  // The dynamic constraints, then the contact colours past the static ones, then the
+  // contacts' Jacobi set: each swept after the schedule's.
+  for (const StageSet set : {StageSet::dynamic, StageSet::contact_colours, StageSet::contacts}) {
+    if (set == StageSet::contact_colours) {
+      for (; next_colour < contact_colours; ++next_colour)
+        stages_.push_back(contact_colour_stage(next_colour));
+      for (std::size_t k = 0; k < contact_colours; ++k) {
+        const auto blocks = contact_colours_->colour_blocks(k);
+        if (std::any_of(blocks.begin(), blocks.end(), [](const ScheduleBlock& b) {
+              return family_traits(b.family).velocity_pass;
+            })) {
+          Stage velocity = contact_colour_stage(k);
+          velocity.kind = StageKind::velocity_pass;
+          velocity_stages_.push_back(velocity);
+        }
+      }
+      continue;
+    }
     const JacobiSet& extra = set == StageSet::dynamic ? dynamic_ : contacts_;
     if (extra.constraint_count == 0) continue;
     const Stage all{StageKind::sequential_sweep, set, 0, std::uint32_t(extra.blocks.size())};
@@ -227,6 +262,7 @@ ConstraintSets& Solver::batches_of(StageSet set) {
     case StageSet::jacobi: return schedule_.jacobi().constraints;
     case StageSet::dynamic: break;
     case StageSet::contacts: return contacts_.constraints;
+    case StageSet::contact_colours: return contact_colours_->constraints;
   }
   return dynamic_.constraints;
 }
@@ -235,6 +271,7 @@ std::span<const ScheduleBlock> Solver::blocks_of(const Stage& stage) const {
   const std::vector<ScheduleBlock>* blocks = &dynamic_.blocks;
   if (stage.set == StageSet::jacobi) blocks = &schedule_.jacobi().blocks;
   if (stage.set == StageSet::contacts) blocks = &contacts_.blocks;
+  if (stage.set == StageSet::contact_colours) blocks = &contact_colours_->blocks;
   const ScheduleBlock* base =
       stage.set == StageSet::coloured ? schedule_.blocks().data() : blocks->data();
   return {base + stage.first_block, base + stage.last_block};
@@ -281,7 +318,8 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
         kVelocityBlock[std::size_t(block.family)](velocities, sets, block.begin, block.end,
                                                   projection.dt);
       };
-      if (stage.set == StageSet::coloured && settings_.mode != SolverMode::sequential) {
+      if ((stage.set == StageSet::coloured || stage.set == StageSet::contact_colours) &&
+          settings_.mode != SolverMode::sequential) {
         parallel_chunks(blocks.size(), 1, [&](std::size_t first, std::size_t last) {
           for (std::size_t b = first; b < last; ++b) solve(blocks[b]);
         });
@@ -477,6 +515,7 @@ void Solver::reset_lambdas() {
   schedule_.jacobi().constraints.for_each(reset);
   dynamic_.constraints.for_each(reset);
   contacts_.constraints.for_each(reset);
+  if (contact_colours_) contact_colours_->constraints.for_each(reset);
 }
 
 void Solver::integrate(Real h) {
@@ -539,7 +578,8 @@ void Solver::step() {
       statistics_.seconds_projection += seconds_since(projection_start);
     statistics_.projections += std::uint64_t(settings_.iterations) *
                                (statistics_.constraints + dynamic_count_ +
-                                contacts_.constraint_count);
+                                contacts_.constraint_count +
+                                (contact_colours_ ? contact_colours_->constraint_count : 0));
     update_velocities(h);
     for (const Stage& stage : velocity_stages_) run_stage(stage, projection);
     if (last && settings_.report_residuals) report_.residual_after = residual();
@@ -552,8 +592,10 @@ void Solver::step() {
 }
 
 Residual Solver::residual() {
-  const auto ranges = detail::residual_ranges(schedule_, dynamic_.constraints,
-                                              contacts_.constraints, kResidualChunk);
+  static const std::array<std::vector<ScheduleBlock>, kConstraintFamilyCount> kNoRanges;
+  const auto ranges = detail::residual_ranges(
+      schedule_, dynamic_.constraints, contacts_.constraints,
+      contact_colours_ ? contact_colours_->ranges : kNoRanges, kResidualChunk);
   std::vector<detail::ResidualPartial> partials(ranges.size());
   const ParticleArrays particles = ParticleArrays::of(state_);
   // XPBD: the residual of the equations the last projections solved, C + α̃λ at their dt.
@@ -568,6 +610,8 @@ Residual Solver::residual() {
                                        ? schedule_.jacobi().constraints
                                    : range.set == detail::ResidualRange::contacts
                                        ? contacts_.constraints
+                                   : range.set == detail::ResidualRange::contact_colours
+                                       ? contact_colours_->constraints
                                        : dynamic_.constraints;
       partials[k] = detail::residual_of_range(range, sets, particles, compliance_dt);
     }
@@ -578,9 +622,11 @@ Residual Solver::residual() {
     FamilyResidual& family = result.families[f];
     if (family.constraints == 0) continue;
     family.worst_is_dynamic = worst[f].set == detail::ResidualRange::dynamic;
-    family.worst_is_contact = worst[f].set == detail::ResidualRange::contacts;
+    const bool coloured_contact = worst[f].set == detail::ResidualRange::contact_colours;
+    family.worst_is_contact = worst[f].set == detail::ResidualRange::contacts || coloured_contact;
     const auto& contact_source = contact_source_[f];
     family.worst = family.worst_is_dynamic ? dynamic_user_index(ConstraintFamily(f), worst[f].slot)
+                   : coloured_contact ? contact_colours_->source[f][worst[f].slot]
                    : family.worst_is_contact
                        ? (contact_source.empty() ? worst[f].slot : contact_source[worst[f].slot])
                        : schedule_.user_constraint(ConstraintFamily(f),
@@ -671,12 +717,12 @@ void Solver::set_dynamic_constraints(ConstraintSets constraints) {
                          " particles, the model has " + std::to_string(state_.size()));
   });
   dynamic_count_ = constraints.size();
-  dynamic_ = extra_set(std::move(constraints), dynamic_source_, false);
+  dynamic_ = extra_set(constraints, dynamic_source_, false);
   dynamic_work_.bind(dynamic_);
   build_stages();
 }
 
-JacobiSet Solver::extra_set(ConstraintSets constraints,
+JacobiSet Solver::extra_set(const ConstraintSets& constraints,
                             std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>& source,
                             bool scheduled_numbering) {
   const auto sizes = constraints.sizes();
@@ -687,7 +733,7 @@ JacobiSet Solver::extra_set(ConstraintSets constraints,
     for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
       if (sizes[f] != 0) set.blocks.push_back({ConstraintFamily(f), 0, std::uint32_t(sizes[f])});
     set.constraint_count = constraints.size();
-    set.constraints = std::move(constraints);
+    set.constraints = constraints;
     return set;
   }
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
@@ -726,25 +772,63 @@ void Solver::set_collisions(CollisionSettings settings,
   const std::vector<std::uint32_t> tets = scheduled(tetrahedra, 4, "tetrahedron", "solid", "tetrahedron");
   collisions_ = std::make_unique<CollisionStage>(std::move(settings), std::move(triangles),
                                                  state_.size(), tets);
+  if (colours_contacts() && static_phase_masks_.empty()) {
+    static_phase_masks_ = detail::static_phase_masks(schedule_, inverse_masses());
+    contact_masks_.assign(state_.size(), 0);
+  }
 }
 
 void Solver::clear_collisions() {
   collisions_.reset();
   contacts_ = JacobiSet();
+  contacts_found_ = ConstraintSets();
+  contact_colours_.reset();
   contact_source_ = {};
   contacts_work_.bind(contacts_);
   build_stages();
 }
 
 void Solver::detect_contacts(Real h) {
-  ConstraintSets found;
+  contacts_found_ = ConstraintSets();
   arena_->execute(
-      [&] { collisions_->detect(state_, h, Real(settings_.gravity.norm()), found); });
-  // The contacts come in the schedule's numbering, sorted by particle: the set's order is
+      [&] { collisions_->detect(state_, h, Real(settings_.gravity.norm()), contacts_found_); });
+  // The contacts come in the schedule's numbering, sorted by particle: the sets' order is
   // theirs, whatever the thread count.
-  contacts_ = extra_set(std::move(found), contact_source_, true);
+  const auto start = Clock::now();
+  if (!colours_contacts()) {
+    contacts_ = extra_set(contacts_found_, contact_source_, true);
+  } else {
+    contact_colours_ = std::make_unique<detail::ColouredContacts>(detail::colour_contacts(
+        contacts_found_, static_phase_masks_, contact_masks_, inverse_masses(),
+        schedule_.options()));
+    // The overflow as a Jacobi set; its slots lead back to the found contacts.
+    ConstraintSets overflow;
+    std::size_t overflowed = 0;
+    overflow.for_each([&](ConstraintFamily family, auto& batch) {
+      using Batch = std::decay_t<decltype(batch)>;
+      const auto& list = contact_colours_->overflow[std::size_t(family)];
+      overflowed += list.size();
+      if (list.empty()) return;
+      batch = detail::reorder_batch(contacts_found_.of_type<Batch>(), list, detail::kNoContact,
+                                    state_.size(),
+                                    [](std::size_t, std::size_t, ParticleIndex p) { return p; });
+    });
+    contacts_ = JacobiSet();
+    contact_source_ = {};
+    if (overflowed != 0) contacts_ = extra_set(overflow, contact_source_, true);
+    for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
+      for (std::uint32_t& s : contact_source_[f]) s = contact_colours_->overflow[f][s];
+    const std::size_t past_static =
+        contact_colours_->colour_count() -
+        std::min(contact_colours_->colour_count(), schedule_.phase_count());
+    statistics_.contact_colours_total += past_static;
+    statistics_.contact_colours_max = std::max(statistics_.contact_colours_max, past_static);
+    statistics_.contacts_overflowed += overflowed;
+  }
   contacts_work_.bind(contacts_);
   build_stages();
+  ++statistics_.contact_substeps;
+  statistics_.seconds_contact_scheduling += seconds_since(start);
 }
 
 }  // namespace tessera

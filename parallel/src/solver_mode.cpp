@@ -1,4 +1,4 @@
-// Solver mode and sequential order names (solver_mode.hpp).
+// Solver mode, sequential order and contact scheduling names (solver_mode.hpp).
 #include <tessera/parallel/solver_mode.hpp>
 
 #include <string>
@@ -39,6 +39,21 @@ SequentialOrder parse_sequential_order(std::string_view name) {
     if (sequential_order_name(order) == name) return order;
   throw InvalidInput("unknown sequential order '" + std::string(name) +
                      "' (known: groups, input)");
+}
+
+std::string_view contact_scheduling_name(ContactScheduling scheduling) {
+  switch (scheduling) {
+    case ContactScheduling::jacobi: return "jacobi";
+    case ContactScheduling::coloured: return "coloured";
+  }
+  return "unknown";
+}
+
+ContactScheduling parse_contact_scheduling(std::string_view name) {
+  for (const ContactScheduling scheduling : {ContactScheduling::jacobi, ContactScheduling::coloured})
+    if (contact_scheduling_name(scheduling) == name) return scheduling;
+  throw InvalidInput("unknown contact scheduling '" + std::string(name) +
+                     "' (known: jacobi, coloured)");
 }
 
 }  // namespace tessera

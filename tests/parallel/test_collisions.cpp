@@ -100,10 +100,13 @@ TEST(Collisions, ADrapedClothEndsOutsideTheSphereAndTheGroundWithoutIntersecting
 
 TEST(Collisions, EveryThreadCountGivesTheSameStateAndEveryModeStaysOutside) {
   Drape drape(12);
-  for (const SolverMode mode : test::kSolverModes) {
+  for (const SolverMode mode : test::kSolverModes)
+  for (const ContactScheduling scheduling : {ContactScheduling::jacobi, ContactScheduling::coloured}) {
     std::vector<Vector3r> first;
     for (const std::size_t threads : {1u, 2u}) {
-      Solver solver = make_solver(drape.model, drape_settings(mode, threads));
+      SolverSettings settings = drape_settings(mode, threads);
+      settings.contact_scheduling = scheduling;
+      Solver solver = make_solver(drape.model, settings);
       solver.set_collisions(drape.collisions, drape.triangles);
       for (int frame = 0; frame < 30; ++frame) solver.step();
       const auto positions = solver.positions();
@@ -165,9 +168,13 @@ struct TwoBlockPile {
 
 TEST(Collisions, ABlockDroppedOnABlockRestsOnItWithoutPenetrationTheSameOnAnyThreadCount) {
   const TwoBlockPile pile;
+  for (const ContactScheduling scheduling : {ContactScheduling::jacobi, ContactScheduling::coloured}) {
+  SCOPED_TRACE(std::string(contact_scheduling_name(scheduling)));
   std::vector<Vector3r> first;
   for (const std::size_t threads : {1u, 2u}) {
-    Solver solver = make_solver(pile.model, drape_settings(SolverMode::gs, threads));
+    SolverSettings settings = drape_settings(SolverMode::gs, threads);
+    settings.contact_scheduling = scheduling;
+    Solver solver = make_solver(pile.model, settings);
     solver.set_collisions(pile.collisions, pile.surface, pile.tetrahedra);
     const Real start_energy = pile.energy(solver);
     std::size_t solid_contacts = 0;
@@ -193,6 +200,11 @@ TEST(Collisions, ABlockDroppedOnABlockRestsOnItWithoutPenetrationTheSameOnAnyThr
     for (const Vector3r& p : positions) EXPECT_GE(p.y(), -Real(1e-4)) << "above the ground";
     if (first.empty()) first = positions;
     else EXPECT_TRUE(same_bits(first, positions)) << "1 and 2 threads";
+    if (scheduling == ContactScheduling::coloured) {
+      EXPECT_GT(solver.statistics().contact_colours_max, 0u) << "contacts past the static colours";
+      EXPECT_EQ(solver.statistics().contacts_overflowed, 0u);
+    }
+  }
   }
 }
 

@@ -118,6 +118,9 @@ struct SimulationSettings {
   std::string mode = "gs";
   /// Mode sequential's order: "groups" (the reference library's) or "input".
   std::string sequential_order = "groups";
+  /// How contacts are scheduled in modes gs and hybrid: "jacobi" or "coloured"
+  /// (SolverSettings::contact_scheduling); unset keeps the solver's default.
+  std::optional<std::string> contact_scheduling;
   /// The RMS residual past which a step counts as diverged (SolverSettings::divergence_rms).
   Real divergence_rms = 10;
   /// 0: every hardware thread (the solver's meaning, tessera::worker_threads).

@@ -46,6 +46,10 @@
 
 namespace tessera {
 
+namespace detail {
+struct ColouredContacts;
+}
+
 /// Jacobi over-relaxation ω when nothing else is said (see the README for the measurement).
 inline constexpr Real kDefaultJacobiRelaxation = Real(1.5);
 /// Chebyshev acceleration of the Jacobi iterations when nothing else is said (see
@@ -53,6 +57,9 @@ inline constexpr Real kDefaultJacobiRelaxation = Real(1.5);
 inline constexpr bool kDefaultChebyshev = false;
 inline constexpr Real kDefaultChebyshevRho = Real(0.9);
 inline constexpr std::size_t kDefaultChebyshevDelay = 2;
+/// Contacts as a Jacobi set or coloured on top of the static colouring (SolverSettings::
+/// contact_scheduling).
+inline constexpr ContactScheduling kDefaultContactScheduling = ContactScheduling::jacobi;
 
 struct SolverSettings {
   SolverMode mode = SolverMode::gs;
@@ -134,6 +141,9 @@ struct SolverSettings {
   /// Mode sequential: the reference library's greedy groups one after another (default) or
   /// the input order (solver_mode.hpp says which is which and why groups is the default).
   SequentialOrder sequential_order = SequentialOrder::groups;
+  /// Modes gs and hybrid: how the collision stage's contacts are scheduled each substep
+  /// (solver_mode.hpp); see kDefaultContactScheduling for the measurement.
+  ContactScheduling contact_scheduling = kDefaultContactScheduling;
 };
 
 /// What the last step() measured.
@@ -161,6 +171,15 @@ struct SolverStatistics {
   /// Constraint projections done (constraints × iterations × substeps × steps).
   std::uint64_t projections = 0;
   std::uint64_t steps = 0;
+  /// With a collision stage: time spent turning each substep's contacts into their schedule
+  /// (a Jacobi set, or the contact colours and the overflow's set), and, with
+  /// ContactScheduling::coloured, the contact colours past the static phases summed over the
+  /// substeps and their most in one substep, and the contacts that found no colour.
+  double seconds_contact_scheduling = 0;
+  std::uint64_t contact_substeps = 0;
+  std::uint64_t contact_colours_total = 0;
+  std::size_t contact_colours_max = 0;
+  std::uint64_t contacts_overflowed = 0;
 };
 
 class Solver {
@@ -240,8 +259,9 @@ class Solver {
   void clear_collisions();
   /// The stage (its settings and statistics), or null.
   const CollisionStage* collisions() const { return collisions_.get(); }
-  /// The contacts of the last substep, in the schedule's numbering.
-  const ConstraintSets& contacts() const { return contacts_.constraints; }
+  /// The contacts of the last substep as the collision stage found them, in the schedule's
+  /// numbering.
+  const ConstraintSets& contacts() const { return contacts_found_; }
 
   /// The particles in the schedule's numbering, for code that works on the arrays.
   const ParticleState& scheduled_state() const { return state_; }
@@ -262,7 +282,7 @@ class Solver {
   /// A set swept after the schedule's (dynamic constraints, contacts): a Jacobi set built
   /// from `constraints`, whose particles renumber() maps to the schedule's numbering (mode
   /// sequential: the blocks only, in input order). source gets the caller's index per slot.
-  JacobiSet extra_set(ConstraintSets constraints,
+  JacobiSet extra_set(const ConstraintSets& constraints,
                       std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>& source,
                       bool scheduled_numbering);
   void update_velocities(Real h);
@@ -307,9 +327,19 @@ class Solver {
   std::size_t chebyshev_iteration_ = 0;
   Real chebyshev_weight_ = 1;
   std::size_t dynamic_count_ = 0;
-  /// The collision stage, its contacts of the current substep and their work.
+  /// The collision stage, its contacts of the current substep (as found; as a Jacobi set, with
+  /// ContactScheduling::coloured the overflow only; coloured) and their work.
   std::unique_ptr<CollisionStage> collisions_;
+  ConstraintSets contacts_found_;
   JacobiSet contacts_;
+  std::unique_ptr<detail::ColouredContacts> contact_colours_;
+  /// ContactScheduling::coloured: each particle's static phases, and scratch (zero between
+  /// substeps) for the substep's contact colours.
+  std::vector<std::uint64_t> static_phase_masks_, contact_masks_;
+  /// The inverse masses without the arrays' padding (one per particle).
+  std::span<const Real> inverse_masses() const { return {state_.inverse_mass.data(), state_.size()}; }
+  /// Whether the contacts are coloured (the setting, in mode gs or hybrid).
+  bool colours_contacts() const;
   JacobiWork contacts_work_;
   std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> contact_source_;
   /// The time step of the last projections (step: the substep; project: its dt), which the

@@ -43,6 +43,24 @@ std::string_view sequential_order_name(SequentialOrder order);
 /// The order of that name; throws InvalidInput listing the names for any other.
 SequentialOrder parse_sequential_order(std::string_view name);
 
+/// How the solver schedules the contacts the collision stage finds each substep (modes gs
+/// and hybrid; mode jacobi keeps them in a Jacobi set, mode sequential sweeps them in order).
+enum class ContactScheduling : std::uint8_t {
+  /// One Jacobi set of their own after the model's constraints: every contact from the same
+  /// positions, each particle moved by the mean of its contacts' corrections.
+  jacobi,
+  /// Coloured on top of the static colouring (contact_colouring.hpp): each contact, first-fit,
+  /// takes the first colour none of its movable particles already carries (a static phase's,
+  /// or a contact's of this substep) and runs as Gauss–Seidel right after that static phase;
+  /// contacts that find none of the 64 colours go to a Jacobi set (the overflow).
+  coloured,
+};
+
+/// "jacobi", "coloured".
+std::string_view contact_scheduling_name(ContactScheduling scheduling);
+/// The scheduling of that name; throws InvalidInput listing the names for any other.
+ContactScheduling parse_contact_scheduling(std::string_view name);
+
 /// Every mode, in declaration order.
 inline constexpr SolverMode kSolverModes[] = {SolverMode::gs, SolverMode::jacobi,
                                               SolverMode::hybrid, SolverMode::sequential};

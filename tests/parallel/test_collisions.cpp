@@ -212,12 +212,12 @@ TEST(Collisions, ABlockDroppedOnABlockRestsOnItWithoutPenetrationTheSameOnAnyThr
 /// the other 4 cm above, shifted by half a cell, falling onto it; both sliding along x at
 /// 2 m/s on a frictionless ground (so every particle moves 2 mm per substep).
 struct TwoLayers {
+  static constexpr std::size_t n = 12;
   Model model;
   std::vector<std::uint32_t> triangles;
   CollisionSettings collisions;
 
   TwoLayers() {
-    const std::size_t n = 12;
     const Real h = Real(1) / Real(n - 1);
     const io::ClothGrid grid = io::make_cloth_grid(n, n, h);
     std::vector<Vector3r> positions;
@@ -265,10 +265,16 @@ TEST(Collisions, SelfContactsFoundEveryFourSubstepsAndRefinedEachSubstepStayAsTi
   // Keeping the 4-substep list instead gave 3.9 % more here (1,684 against 1,622).
   EXPECT_NEAR(fourth_contacts, every_contacts, 0.01 * every_contacts);
   EXPECT_EQ(count_self_intersections(fourth, layers.triangles), 0u);
-  const std::size_t half = fourth.size() / 2;
+  // The upper cloth on the lower, a thickness above it, except its last row and column: they
+  // overhang the lower cloth by half a cell and, contacts swept Gauss–Seidel (the default
+  // ContactScheduling::coloured), drape down to the ground beside it (a Jacobi set's averaged
+  // pushes held them up, and left the rest 0.3 mm closer than the thickness).
+  const std::size_t half = fourth.size() / 2, n = layers.n;
   for (std::size_t i = 0; i < half; ++i) {
     EXPECT_GE(fourth[i].y(), Real(0.004)) << "on the ground";
-    EXPECT_GE(fourth[half + i].y(), fourth[i].y() + Real(0.004)) << "the upper cloth on the lower";
+    EXPECT_GE(fourth[half + i].y(), Real(0.004)) << "on the ground";
+    if (i % n != n - 1 && i / n != n - 1)
+      EXPECT_GE(fourth[half + i].y(), fourth[i].y() + Real(0.0045)) << "the upper cloth on the lower";
   }
   EXPECT_TRUE(same_bits(fourth, run(4, 1).first)) << "1 and 2 threads";
 }

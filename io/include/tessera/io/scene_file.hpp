@@ -29,7 +29,7 @@
 //     "chebyshev": true, "chebyshev_rho": 0.9,  // mode jacobi's acceleration (solver.hpp)
 //     "strategy": "stencil", "mode": "gs", "threads": 0,  // 0: every hardware thread
 //     "sequential_order": "groups",          // mode sequential: or "input"
-//     "contact_scheduling": "jacobi",        // modes gs, hybrid: or "coloured" (contacts)
+//     "contact_scheduling": "coloured",      // modes gs, hybrid: or "jacobi" (contacts)
 //     "divergence_rms": 10,                  // a step above this RMS residual is a failure
 //     "colliders": [                         // static colliders (ColliderDescription)
 //       { "shape": "plane", "normal": [0, 1, 0], "offset": -0.6 },

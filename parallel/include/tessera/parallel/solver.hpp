@@ -58,8 +58,15 @@ inline constexpr bool kDefaultChebyshev = false;
 inline constexpr Real kDefaultChebyshevRho = Real(0.9);
 inline constexpr std::size_t kDefaultChebyshevDelay = 2;
 /// Contacts as a Jacobi set or coloured on top of the static colouring (SolverSettings::
-/// contact_scheduling).
-inline constexpr ContactScheduling kDefaultContactScheduling = ContactScheduling::jacobi;
+/// contact_scheduling). Coloured, measured side by side (`tessera run SCENE --threads 2`,
+/// 32 × 1, an idle 2-core machine): on the pile (8 FEM blocks, 90 frames) the penetration
+/// left after the iterations (particle–tet contact residual, max) falls from 0.63 mm to
+/// 0.04 mm and the FEM residual max from 0.0109 to 0.0045, with 660 contacts per substep in
+/// 23 colours past the static ones, for 21 % more stepping time (0.91 -> 1.10 s: those
+/// phases) and 26 % less scheduling time (0.184 -> 0.136 s: no incidence lists); on the 64²
+/// drape (120 frames) both take 5.06 s and leave no penetration, 20,889 of 54 million
+/// contacts overflowing into the Jacobi set.
+inline constexpr ContactScheduling kDefaultContactScheduling = ContactScheduling::coloured;
 
 struct SolverSettings {
   SolverMode mode = SolverMode::gs;
@@ -245,10 +252,11 @@ class Solver {
 
   /// Collision detection every substep (collision_stage.hpp): after each prediction the
   /// stage finds the contacts of the predicted positions (colliders, and with
-  /// settings.self_collision the surface against itself), which the solver then projects
-  /// after the model's and the dynamic constraints in every iteration, as a Jacobi set of
-  /// their own (mode sequential: one after another), with their velocity pass after the
-  /// velocity update. `surface_triangles` (3 particles each, the user's numbering) is the
+  /// settings.self_collision the surface against itself), which the solver then projects in
+  /// every iteration as SolverSettings::contact_scheduling says (coloured on top of the
+  /// static colours by default, or a Jacobi set of their own after the model's and the
+  /// dynamic constraints; mode jacobi: that set; mode sequential: one after another), with
+  /// their velocity pass after the velocity update. `surface_triangles` (3 particles each, the user's numbering) is the
   /// surface self-collision works on; `tetrahedra` (4 each) are the solids, whose boundary
   /// faces among those triangles get particle–tet contacts (solid_contacts.hpp). Replaces an
   /// earlier stage; throws InvalidInput for bad settings or an element naming a particle the

@@ -272,9 +272,14 @@ using detail::smallest_last_order;
 
 using detail::ParticleColourMasks;
 
+// First-fit starts with one word of colours per particle and grows the sets on demand: asking
+// the graph for its lower bound would count every particle's degree, which first-fit never
+// needs (the same colours either way).
+constexpr std::size_t kFirstFitCapacity = 64;
+
 Colouring colour_first_fit(const ConstraintGraph& graph, std::span<const ConstraintIndex> order) {
   std::vector<Colour> colours = make_large_vector<Colour>(graph.constraint_count(), 0);
-  ParticleColourMasks masks(graph.particle_count(), graph.colour_lower_bound());
+  ParticleColourMasks masks(graph.particle_count(), kFirstFitCapacity);
   detail::first_fit_in_order(graph, order, masks, colours);
   return Colouring::from_colours(std::move(colours));
 }
@@ -339,7 +344,7 @@ class FirstFitStrategy final : public ColouringStrategy {
   }
   Colouring colour(const ConstraintGraph& graph, const ColouringOptions&) const override {
     std::vector<Colour> colours = make_large_vector<Colour>(graph.constraint_count(), 0);
-    ParticleColourMasks masks(graph.particle_count(), graph.colour_lower_bound());
+    ParticleColourMasks masks(graph.particle_count(), kFirstFitCapacity);
     detail::first_fit_in_id_order(graph, masks, colours);
     return Colouring::from_colours(std::move(colours));
   }

@@ -1,6 +1,13 @@
 // Colouring benchmarks: coloring/<strategy>/<mesh> for every registered strategy, plus the
 // balance post-pass, graph construction, and the thread scaling of `random`.
 //
+// Start-up: startup/graph/<scene>, startup/graph+<strategy>/<scene> time what a run pays
+// before its first step, constraint_graph(model) and then the strategy, on the tool's scenes
+// (io::build_scene, so the model's families and their slot arrays are the solver's):
+// cloth1024 and cloth256 (distance + dihedral, no tethers: 6.3 M and 0.39 M constraints),
+// cloth1024_tethers (the tool's default cloth:1024, 7.3 M) and bar (strain tetrahedra of a
+// 40x40x160-cell bar, no tethers).
+//
 // Meshes: a 1024×1024 cloth with distance + bending constraints (≈ 6.3 M), the same cloth with
 // its constraints shuffled into a random order, the cloth with distance constraints only, and
 // a tetrahedral bar of ≈ 1 M tetrahedra (volume) plus its edges (distance). Each is built
@@ -18,7 +25,10 @@
 #include <tessera/coloring/colouring_statistics.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/refinement.hpp>
+#include <tessera/coloring/model_graph.hpp>
 #include <tessera/io/generators.hpp>
+#include <tessera/io/scene_description.hpp>
+#include <tessera/io/scene_file.hpp>
 
 namespace {
 
@@ -141,23 +151,69 @@ void metis_part_size_benchmark(benchmark::State& state, std::string mesh_name,
   state.counters["particles_per_part"] = double(particles_per_part);
 }
 
-void graph_build_benchmark(benchmark::State& state, std::string mesh_name) {
+// The graph as the constructor builds it, or with the particle → constraint lists that a
+// strategy walking the conflict graph builds on first use.
+void graph_build_benchmark(benchmark::State& state, std::string mesh_name, bool with_particle_lists) {
   const BenchmarkMesh& m = mesh(mesh_name);
   const std::vector<ConstraintGroup> groups = m.groups();
   for (auto _ : state) {
     ConstraintGraph graph(m.inverse_masses, groups);
-    benchmark::DoNotOptimize(graph.particle_constraints().data());
+    if (with_particle_lists) benchmark::DoNotOptimize(graph.particle_constraints().data());
+    benchmark::DoNotOptimize(graph.constraint_particles().data());
   }
   state.counters["constraints"] = double(m.graph.constraint_count());
   state.counters["incidences"] = double(m.graph.incidence_count());
 }
 
+const Model& startup_model(const std::string& name) {
+  static std::map<std::string, std::unique_ptr<Model>> models;
+  auto it = models.find(name);
+  if (it != models.end()) return *it->second;
+  const bool tethers = name == "cloth1024_tethers";
+  io::SceneDescription description = io::parse_scene_spec(
+      name == "cloth256" ? "cloth:256" : name == "bar" ? "bar:40x40x160" : "cloth:1024");
+  if (!tethers) description.tethers = io::TetherRule::none;
+  auto model = std::make_unique<Model>(io::build_scene(description).model);
+  return *models.emplace(name, std::move(model)).first->second;
+}
+
+const std::vector<std::string> kStartupScenes = {"cloth1024", "cloth1024_tethers", "cloth256", "bar"};
+
+// constraint_graph(model), then the strategy when one is named: the start-up cost.
+void startup_benchmark(benchmark::State& state, std::string strategy, std::string scene) {
+  const Model& model = startup_model(scene);
+  static const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
+  std::size_t colours = 0, constraints = 0;
+  for (auto _ : state) {
+    const ConstraintGraph graph = constraint_graph(model);
+    constraints = graph.constraint_count();
+    if (!strategy.empty()) {
+      const Colouring colouring = registry.get(strategy).colour(graph, {});
+      colours = colouring.colour_count();
+      benchmark::DoNotOptimize(colouring.colours().data());
+    }
+    benchmark::DoNotOptimize(graph.constraint_particles().data());
+  }
+  state.counters["constraints"] = double(constraints);
+  if (!strategy.empty()) state.counters["colours"] = double(colours);
+}
+
 void register_all() {
+  for (const std::string& scene : kStartupScenes) {
+    benchmark::RegisterBenchmark(("startup/graph/" + scene).c_str(), startup_benchmark, std::string(), scene)
+        ->Unit(benchmark::kMillisecond)->UseRealTime();
+    for (const char* strategy : {"greedy", "stencil"})
+      benchmark::RegisterBenchmark(("startup/graph+" + std::string(strategy) + "/" + scene).c_str(),
+                                   startup_benchmark, std::string(strategy), scene)
+          ->Unit(benchmark::kMillisecond)->UseRealTime();
+  }
   const std::vector<std::string> strategies = {"greedy",  "largest-first",   "smallest-last",
                                                "dsatur",  "stencil",         "iterated-greedy",
                                                "random",  "metis"};
   for (const std::string& m : kMeshes) {
-    benchmark::RegisterBenchmark(("graph/build/" + m).c_str(), graph_build_benchmark, m)
+    benchmark::RegisterBenchmark(("graph/build/" + m).c_str(), graph_build_benchmark, m, false)
+        ->Unit(benchmark::kMillisecond)->UseRealTime();
+    benchmark::RegisterBenchmark(("graph/build+particle_lists/" + m).c_str(), graph_build_benchmark, m, true)
         ->Unit(benchmark::kMillisecond)->UseRealTime();
     for (const std::string& s : strategies) {
       benchmark::RegisterBenchmark(("coloring/" + s + "/" + m).c_str(), colour_benchmark, s, m, false, 0)

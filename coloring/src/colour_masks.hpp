@@ -18,6 +18,8 @@
 #include <tessera/coloring/colouring.hpp>
 #include <tessera/core/huge_pages.hpp>
 
+#include "large_buffer.hpp"
+
 namespace tessera::detail {
 
 class ParticleColourMasks {
@@ -128,7 +130,7 @@ std::vector<ConstraintIndex> smallest_last_order(const ConstraintGraph& graph);
 /// their sorted movable particle ids from the smallest), largest shape classes first, each
 /// class by its smallest particle. Independent of the input order of the constraints. See
 /// sequential_strategies.cpp for why this colours regular meshes at their lower bound.
-std::vector<ConstraintIndex> stencil_order(const ConstraintGraph& graph);
+LargeBuffer<ConstraintIndex> stencil_order(const ConstraintGraph& graph);
 
 /// Renumbers colours so they are dense (unused colours removed, order kept); returns the count.
 std::size_t compact_colours(std::span<Colour> colours);

@@ -66,7 +66,7 @@ class MetisStrategy final : public ColouringStrategy {
     // Constraints grouped by part (crossing last), each group in stencil order (linear, and on
     // regular meshes it packs like the periodic optimum; smallest-last cost seconds here and
     // gave 20 colours instead of 18 on the cloth with bending).
-    const std::vector<ConstraintIndex> order = detail::stencil_order(graph);
+    const detail::LargeBuffer<ConstraintIndex> order = detail::stencil_order(graph);
     std::vector<std::uint32_t> group_start(parts + 2, 0);
     for (std::uint32_t part : part_of_constraint) ++group_start[part + 1];
     std::partial_sum(group_start.begin(), group_start.end(), group_start.begin());

@@ -24,11 +24,14 @@
 #include <algorithm>
 #include <numeric>
 
+#include <tbb/parallel_for.h>
+
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/refinement.hpp>
 #include <tessera/core/huge_pages.hpp>
 
 #include "colour_masks.hpp"
+#include "large_buffer.hpp"
 
 namespace tessera {
 namespace detail {
@@ -37,8 +40,40 @@ std::size_t first_fit_in_order(const ConstraintGraph& graph, std::span<const Con
                                ParticleColourMasks& masks, std::span<Colour> colours) {
   constexpr std::size_t kPrefetchDistance = 16;
   Colour largest = 0;
-  bool any = false;
-  for (std::size_t i = 0; i < order.size(); ++i) {
+  std::size_t i = 0;
+  // While 64 colours suffice, raw arrays and a prefetch in three stages, each reading what the
+  // one before brought in: the constraint's CSR offsets 3d ahead, its particle list 2d ahead,
+  // its particles' sets d ahead (an order is a gather: each stage is a cache miss otherwise).
+  if (masks.words() == 1) {
+    constexpr std::size_t d = kPrefetchDistance / 2;
+    std::uint64_t* bits = masks.data();
+    const std::uint32_t* offsets = graph.constraint_offsets().data();
+    const ParticleIndex* particles = graph.constraint_particles().data();
+    const std::size_t count = order.size();
+    for (; i < count; ++i) {
+      if (i + 3 * d < count) __builtin_prefetch(&offsets[order[i + 3 * d]]);
+      if (i + 2 * d < count) {
+        __builtin_prefetch(&particles[offsets[order[i + 2 * d]]]);
+        __builtin_prefetch(&colours[order[i + 2 * d]], 1);
+      }
+      if (i + d < count) {
+        const ConstraintIndex ahead = order[i + d];
+        for (std::uint32_t j = offsets[ahead]; j < offsets[ahead + 1]; ++j)
+          __builtin_prefetch(&bits[particles[j]]);
+      }
+      const ConstraintIndex c = order[i];
+      const std::uint32_t begin = offsets[c], end = offsets[c + 1];
+      std::uint64_t taken = 0;
+      for (std::uint32_t j = begin; j < end; ++j) taken |= bits[particles[j]];
+      if (taken == ~std::uint64_t(0)) break;  // a 65th colour: the general loop grows the sets
+      const Colour k = static_cast<Colour>(std::countr_one(taken));
+      const std::uint64_t bit = std::uint64_t(1) << k;
+      for (std::uint32_t j = begin; j < end; ++j) bits[particles[j]] |= bit;
+      colours[c] = k;
+      largest = std::max(largest, k);
+    }
+  }
+  for (; i < order.size(); ++i) {
     if (i + kPrefetchDistance < order.size())
       masks.prefetch(graph.particles_of(order[i + kPrefetchDistance]));
     const auto particles = graph.particles_of(order[i]);
@@ -46,9 +81,8 @@ std::size_t first_fit_in_order(const ConstraintGraph& graph, std::span<const Con
     masks.take(particles, k);
     colours[order[i]] = k;
     largest = std::max(largest, k);
-    any = true;
   }
-  return any ? std::size_t(largest) + 1 : 0;
+  return order.empty() ? 0 : std::size_t(largest) + 1;
 }
 
 std::size_t first_fit_in_id_order(const ConstraintGraph& graph, ParticleColourMasks& masks,
@@ -172,59 +206,167 @@ std::vector<ConstraintIndex> smallest_last_order(const ConstraintGraph& graph) {
   return sorted;
 }
 
-/// See colour_masks.hpp. Steps, all linear except one sort of 64-bit keys:
-///  1. per constraint, the sorted movable particles p0 < p1 < ...; its anchor is p0 and its
-///     shape a hash of (count, p1 − p0, p2 − p0, ...);
-///  2. shapes sorted to count each class; a class holding fewer than kSmallestClass
-///     constraints is not a pattern (irregular meshes have almost only those) and joins the
-///     catch-all class of its arity, so irregular input degrades to "by smallest particle";
-///  3. classes ranked by arity (larger stencils first, they are the hard ones to pack), then
-///     by size, then by shape; constraints counting-sorted by anchor, then stably by rank.
-std::vector<ConstraintIndex> stencil_order(const ConstraintGraph& graph) {
-  constexpr std::size_t kSmallestClass = 64;
-  const std::size_t count = graph.constraint_count();
-  std::vector<std::uint64_t> shape(count);
-  std::vector<ParticleIndex> anchor(count, 0);
-  std::vector<std::uint32_t> arity(count);
-  std::vector<ParticleIndex> sorted;
-  for (std::size_t c = 0; c < count; ++c) {
-    const auto particles = graph.particles_of(static_cast<ConstraintIndex>(c));
-    sorted.assign(particles.begin(), particles.end());
-    std::sort(sorted.begin(), sorted.end());
-    arity[c] = static_cast<std::uint32_t>(sorted.size());
-    std::uint64_t h = mix_hash(0x5EED, sorted.size());
-    for (std::size_t i = 1; i < sorted.size(); ++i) h = mix_hash(h, sorted[i] - sorted[0]);
-    shape[c] = h;
-    if (!sorted.empty()) anchor[c] = sorted[0];
+namespace {
+
+/// Constraints per chunk of the stencil order's parallel passes (fixed, so the same work split
+/// and the same arrays for any thread count).
+constexpr std::size_t kStencilChunk = std::size_t(1) << 16;
+
+/// Sorts v[0..n) in place: a network for the usual sizes, std::sort beyond.
+inline void sort_small(ParticleIndex* v, std::size_t n) {
+  const auto order = [&](std::size_t i, std::size_t j) {
+    const ParticleIndex a = v[i], b = v[j];
+    v[i] = std::min(a, b);
+    v[j] = std::max(a, b);
+  };
+  switch (n) {
+    case 0: case 1: return;
+    case 2: order(0, 1); return;
+    case 3: order(0, 1); order(1, 2); order(0, 1); return;
+    case 4: order(0, 1); order(2, 3); order(0, 2); order(1, 3); order(1, 2); return;
+    default: std::sort(v, v + n);
   }
-  // Class sizes: sort the distinct shapes with their multiplicity.
-  std::vector<std::uint64_t> shapes = shape;
-  std::sort(shapes.begin(), shapes.end());
-  struct ShapeClass {
+}
+
+/// Shape classes: distinct shape hashes with their size and arity, found through an
+/// open-addressing table (the shape is already a hash: its low bits pick the slot). Class ids
+/// are in order of first appearance; nothing downstream depends on them (ranks sort classes
+/// by arity, size and shape).
+class ShapeClasses {
+ public:
+  struct Class {
     std::uint64_t shape;
     std::uint32_t size;
     std::uint32_t arity;
   };
-  std::vector<ShapeClass> classes;
-  for (std::size_t i = 0; i < shapes.size();) {
-    std::size_t j = i;
-    while (j < shapes.size() && shapes[j] == shapes[i]) ++j;
-    classes.push_back({shapes[i], static_cast<std::uint32_t>(j - i), 0});
-    i = j;
+  ShapeClasses() : slots_(std::size_t(1) << 10, kEmpty) {}
+
+  std::uint32_t add(std::uint64_t shape, std::uint32_t arity) {
+    std::size_t mask = slots_.size() - 1;
+    for (std::size_t s = shape & mask;; s = (s + 1) & mask) {
+      const std::uint32_t k = slots_[s];
+      if (k == kEmpty) {
+        const auto id = static_cast<std::uint32_t>(classes_.size());
+        classes_.push_back({shape, 1, arity});
+        slots_[s] = id;
+        if (2 * classes_.size() > slots_.size()) grow();
+        return id;
+      }
+      if (classes_[k].shape == shape) {
+        ++classes_[k].size;
+        return k;
+      }
+    }
   }
-  const auto class_index = [&](std::uint64_t h) {
-    return static_cast<std::size_t>(
-        std::lower_bound(classes.begin(), classes.end(), h,
-                         [](const ShapeClass& a, std::uint64_t b) { return a.shape < b; }) -
-        classes.begin());
-  };
-  std::vector<std::uint32_t> class_of(count);
-  for (std::size_t c = 0; c < count; ++c) {
-    class_of[c] = static_cast<std::uint32_t>(class_index(shape[c]));
-    classes[class_of[c]].arity = arity[c];
+  std::vector<Class>& classes() { return classes_; }
+
+ private:
+  static constexpr std::uint32_t kEmpty = ~std::uint32_t(0);
+  void grow() {
+    std::vector<std::uint32_t> wider(2 * slots_.size(), kEmpty);
+    const std::size_t mask = wider.size() - 1;
+    for (std::uint32_t k = 0; k < classes_.size(); ++k) {
+      std::size_t s = classes_[k].shape & mask;
+      while (wider[s] != kEmpty) s = (s + 1) & mask;
+      wider[s] = k;
+    }
+    slots_ = std::move(wider);
   }
-  // Rank: small classes of one arity share a catch-all rank placed after that arity's
-  // patterns. Catch-alls are modelled as a class of size 0 with shape 0 per arity.
+  std::vector<std::uint32_t> slots_;
+  std::vector<Class> classes_;
+};
+
+/// Stable sort of keys (anchor << 32 | constraint id) by anchor, least significant digit
+/// first. A run already in anchor order (the usual case for generated meshes) is left as it is.
+void sort_by_anchor(std::span<std::uint64_t> keys) {
+  bool sorted = true;
+  std::uint64_t largest = 0;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (i > 0 && (keys[i] >> 32) < (keys[i - 1] >> 32)) sorted = false;
+    largest = std::max(largest, keys[i] >> 32);
+  }
+  if (sorted) return;
+  constexpr unsigned kDigitBits = 11;
+  constexpr std::size_t kBuckets = std::size_t(1) << kDigitBits;
+  LargeBuffer<std::uint64_t> scratch(keys.size());
+  std::uint64_t* from = keys.data();
+  std::uint64_t* to = scratch.data();
+  unsigned passes = 0;
+  for (unsigned shift = 32; shift < 64 && (largest >> (shift - 32)) != 0; shift += kDigitBits) {
+    std::vector<std::uint32_t> start(kBuckets + 1, 0);
+    for (std::size_t i = 0; i < keys.size(); ++i) ++start[((from[i] >> shift) & (kBuckets - 1)) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    for (std::size_t i = 0; i < keys.size(); ++i) to[start[(from[i] >> shift) & (kBuckets - 1)]++] = from[i];
+    std::swap(from, to);
+    ++passes;
+  }
+  if (passes % 2 == 1) std::copy(from, from + keys.size(), keys.data());
+}
+
+}  // namespace
+
+/// See colour_masks.hpp. Steps, all linear:
+///  1. per constraint (in parallel), the sorted movable particles p0 < p1 < ...; its anchor is
+///     p0 and its shape a hash of (count, p1 − p0, p2 − p0, ...);
+///  2. shapes counted into classes (a hash table); a class holding fewer than kSmallestClass
+///     constraints is not a pattern (irregular meshes have almost only those) and joins the
+///     catch-all class of its arity, so irregular input degrades to "by smallest particle";
+///  3. classes ranked by arity (larger stencils first, they are the hard ones to pack), then
+///     by size, then by shape; constraints counting-sorted by rank (in parallel over fixed
+///     chunks, stably), then each rank's run sorted stably by anchor (runs in parallel).
+/// The order is by (rank, anchor, constraint id) whatever the thread count.
+LargeBuffer<ConstraintIndex> stencil_order(const ConstraintGraph& graph) {
+  constexpr std::size_t kSmallestClass = 64;
+  const std::size_t count = graph.constraint_count();
+  const std::size_t chunks = (count + kStencilChunk - 1) / kStencilChunk;
+  const std::uint32_t* offsets = graph.constraint_offsets().data();
+  const ParticleIndex* incidences = graph.constraint_particles().data();
+
+  // 1. Shape and anchor of every constraint.
+  LargeBuffer<std::uint64_t> shape(count);
+  LargeBuffer<ParticleIndex> anchor(count);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    constexpr std::size_t kSmall = 8;
+    ParticleIndex small[kSmall];
+    std::vector<ParticleIndex> large;
+    const std::size_t end = std::min(count, (chunk + 1) * kStencilChunk);
+    for (std::size_t c = chunk * kStencilChunk; c < end; ++c) {
+      const std::size_t n = offsets[c + 1] - offsets[c];
+      ParticleIndex* sorted = small;
+      if (n > kSmall) {
+        large.resize(n);
+        sorted = large.data();
+      }
+      std::copy(incidences + offsets[c], incidences + offsets[c + 1], sorted);
+      sort_small(sorted, n);
+      std::uint64_t h = mix_hash(0x5EED, n);
+      for (std::size_t i = 1; i < n; ++i) h = mix_hash(h, sorted[i] - sorted[0]);
+      shape[c] = h;
+      anchor[c] = n > 0 ? sorted[0] : 0;
+    }
+  });
+
+  // 2. Classes, and the class of every constraint.
+  ShapeClasses table;
+  LargeBuffer<std::uint32_t> class_of(count);
+  {
+    std::uint64_t previous_shape = 0;
+    std::uint32_t previous_class = ~std::uint32_t(0);
+    for (std::size_t c = 0; c < count; ++c) {
+      // Runs of one shape are common (a family generated row by row): skip the probe.
+      if (shape[c] == previous_shape && previous_class != ~std::uint32_t(0)) {
+        ++table.classes()[previous_class].size;
+      } else {
+        previous_class = table.add(shape[c], offsets[c + 1] - offsets[c]);
+        previous_shape = shape[c];
+      }
+      class_of[c] = previous_class;
+    }
+  }
+  std::vector<ShapeClasses::Class>& classes = table.classes();
+
+  // 3. Rank: small classes of one arity share a catch-all rank placed after that arity's
+  // patterns. Catch-alls are modelled as a class of size 0 per arity.
   std::vector<std::size_t> ranking(classes.size());
   std::iota(ranking.begin(), ranking.end(), std::size_t(0));
   const auto effective_size = [&](std::size_t k) {
@@ -249,17 +391,48 @@ std::vector<ConstraintIndex> stencil_order(const ConstraintGraph& graph) {
     }
     rank_of_class[k] = rank;
   }
-  // Counting sort by anchor, then stable counting sort by rank.
-  std::vector<std::uint32_t> start(graph.particle_count() + 1, 0);
-  for (std::size_t c = 0; c < count; ++c) ++start[anchor[c] + 1];
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<ConstraintIndex> by_anchor(count);
-  for (std::size_t c = 0; c < count; ++c) by_anchor[start[anchor[c]]++] = static_cast<ConstraintIndex>(c);
-  std::vector<std::uint32_t> rank_start(std::size_t(rank) + 2, 0);
-  for (std::size_t c = 0; c < count; ++c) ++rank_start[rank_of_class[class_of[c]] + 1];
-  std::partial_sum(rank_start.begin(), rank_start.end(), rank_start.begin());
-  std::vector<ConstraintIndex> order(count);
-  for (ConstraintIndex c : by_anchor) order[rank_start[rank_of_class[class_of[c]]]++] = c;
+  const std::size_t ranks = classes.empty() ? 0 : std::size_t(rank) + 1;
+
+  // 4. Stable counting sort by rank: per-chunk counts, then each chunk scatters from its own
+  // cursors. Keys carry the anchor so the runs sort without another gather.
+  std::vector<std::uint32_t> chunk_cursor(chunks * ranks, 0);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    std::uint32_t* counts = chunk_cursor.data() + chunk * ranks;
+    const std::size_t end = std::min(count, (chunk + 1) * kStencilChunk);
+    for (std::size_t c = chunk * kStencilChunk; c < end; ++c) {
+      class_of[c] = rank_of_class[class_of[c]];  // from here on: the rank
+      ++counts[class_of[c]];
+    }
+  });
+  std::vector<std::uint32_t> rank_start(ranks + 1, 0);
+  {
+    std::uint32_t next = 0;
+    for (std::size_t r = 0; r < ranks; ++r) {
+      rank_start[r] = next;
+      for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+        const std::uint32_t n = chunk_cursor[chunk * ranks + r];
+        chunk_cursor[chunk * ranks + r] = next;
+        next += n;
+      }
+    }
+    rank_start[ranks] = next;
+  }
+  // The shapes are no longer needed: their storage takes the keys.
+  LargeBuffer<std::uint64_t> keys = std::move(shape);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    std::uint32_t* cursor = chunk_cursor.data() + chunk * ranks;
+    const std::size_t end = std::min(count, (chunk + 1) * kStencilChunk);
+    for (std::size_t c = chunk * kStencilChunk; c < end; ++c)
+      keys[cursor[class_of[c]]++] = (std::uint64_t(anchor[c]) << 32) | c;
+  });
+
+  // 5. Each rank's run by anchor (ids already increase within a run).
+  LargeBuffer<ConstraintIndex> order(count);
+  tbb::parallel_for(std::size_t(0), ranks, [&](std::size_t r) {
+    const std::size_t begin = rank_start[r], end = rank_start[r + 1];
+    sort_by_anchor({keys.data() + begin, end - begin});
+    for (std::size_t i = begin; i < end; ++i) order[i] = static_cast<ConstraintIndex>(keys[i]);
+  }, tbb::simple_partitioner());
   return order;
 }
 
@@ -272,9 +445,14 @@ using detail::smallest_last_order;
 
 using detail::ParticleColourMasks;
 
+// First-fit starts with one word of colours per particle and grows the sets on demand: asking
+// the graph for its lower bound would count every particle's degree, which first-fit never
+// needs (the same colours either way).
+constexpr std::size_t kFirstFitCapacity = 64;
+
 Colouring colour_first_fit(const ConstraintGraph& graph, std::span<const ConstraintIndex> order) {
   std::vector<Colour> colours = make_large_vector<Colour>(graph.constraint_count(), 0);
-  ParticleColourMasks masks(graph.particle_count(), graph.colour_lower_bound());
+  ParticleColourMasks masks(graph.particle_count(), kFirstFitCapacity);
   detail::first_fit_in_order(graph, order, masks, colours);
   return Colouring::from_colours(std::move(colours));
 }
@@ -339,7 +517,7 @@ class FirstFitStrategy final : public ColouringStrategy {
   }
   Colouring colour(const ConstraintGraph& graph, const ColouringOptions&) const override {
     std::vector<Colour> colours = make_large_vector<Colour>(graph.constraint_count(), 0);
-    ParticleColourMasks masks(graph.particle_count(), graph.colour_lower_bound());
+    ParticleColourMasks masks(graph.particle_count(), kFirstFitCapacity);
     detail::first_fit_in_id_order(graph, masks, colours);
     return Colouring::from_colours(std::move(colours));
   }

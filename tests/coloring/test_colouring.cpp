@@ -1,6 +1,10 @@
 // Colouring (CSR by colour, particle permutation), validate() and the statistics.
 #include <gtest/gtest.h>
 
+#include <random>
+
+#include <tbb/task_arena.h>
+
 #include <tessera/coloring/colouring.hpp>
 #include <tessera/coloring/colouring_statistics.hpp>
 #include <tessera/core/error.hpp>
@@ -86,6 +90,27 @@ TEST(Statistics, SizesBalanceAndLowerBound) {
   for (const char* key : {"strategy: hand made", "colours: ", "sizes: ", "largest: ", "smallest: ",
                           "balance: ", "lower_bound: 6", "colours/lower_bound: ", "seconds: ", "valid: "})
     EXPECT_NE(text.find(key), std::string::npos) << key;
+}
+
+TEST(Colouring, LargeInputGroupedInParallelAsSequentially) {
+  // Over 256 K constraints with few colours: the parallel grouping. Every colour's list must be
+  // its constraints by increasing id, for 1 and 2 threads; an empty colour is still refused.
+  std::mt19937 random(5);
+  std::vector<Colour> colours(300000);
+  for (Colour& k : colours) k = static_cast<Colour>(random() % 19);
+  std::vector<std::vector<ConstraintIndex>> expected(19);
+  for (std::size_t c = 0; c < colours.size(); ++c) expected[colours[c]].push_back(static_cast<ConstraintIndex>(c));
+  for (int threads : {1, 2}) {
+    const Colouring colouring =
+        tbb::task_arena(threads).execute([&] { return Colouring::from_colours(colours); });
+    ASSERT_EQ(colouring.colour_count(), 19u);
+    for (Colour k = 0; k < 19; ++k) {
+      const auto list = colouring.constraints_of(k);
+      EXPECT_EQ(std::vector<ConstraintIndex>(list.begin(), list.end()), expected[k]) << "colour " << k;
+    }
+  }
+  for (Colour& k : colours) if (k == 7) k = 3;
+  EXPECT_THROW(Colouring::from_colours(colours), InvalidInput);
 }
 
 }  // namespace

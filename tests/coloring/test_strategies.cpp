@@ -6,6 +6,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <tuple>
 #include <utility>
 
 #include <tbb/task_arena.h>
@@ -456,6 +457,78 @@ TEST(Registry, ListsBuiltinsFindsByNameAndTakesUserStrategies) {
   EXPECT_EQ(registry.get("one-colour-per-constraint").colour(graph, {}).colour_count(),
             graph.constraint_count());
   EXPECT_TRUE(registry.contains("one-colour-per-constraint"));
+}
+
+// The stencil order by its definition, slowly: constraints by (rank of their shape class,
+// smallest movable particle, id), then plain first-fit. The shape hash is colour_masks.hpp's
+// mix_hash chain (equal-sized classes are ranked by it, so the reference needs the same one).
+std::uint64_t reference_mix(std::uint64_t seed, std::uint64_t value) {
+  std::uint64_t z = seed * 0x9E3779B97F4A7C15ull + value + 0x632BE59BD9B4E019ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+std::vector<Colour> reference_stencil_colours(const ConstraintGraph& graph) {
+  const std::size_t count = graph.constraint_count();
+  std::vector<std::uint64_t> shape(count);
+  std::vector<ParticleIndex> anchor(count, 0);
+  std::vector<std::size_t> arity(count);
+  std::map<std::uint64_t, std::pair<std::size_t, std::size_t>> classes;  // shape -> size, arity
+  for (std::size_t c = 0; c < count; ++c) {
+    const auto span = graph.particles_of(static_cast<ConstraintIndex>(c));
+    std::vector<ParticleIndex> sorted(span.begin(), span.end());
+    std::sort(sorted.begin(), sorted.end());
+    shape[c] = reference_mix(0x5EED, sorted.size());
+    for (std::size_t i = 1; i < sorted.size(); ++i) shape[c] = reference_mix(shape[c], sorted[i] - sorted[0]);
+    if (!sorted.empty()) anchor[c] = sorted[0];
+    arity[c] = sorted.size();
+    auto& entry = classes[shape[c]];
+    ++entry.first;
+    entry.second = sorted.size();
+  }
+  // Rank key: larger arity first; a class of 64 or more by size (larger first) then shape; the
+  // others of one arity together after them.
+  const auto rank_key = [&](std::uint64_t h) {
+    const auto [size, a] = classes.at(h);
+    const bool pattern = size >= 64;
+    return std::make_tuple(~a, pattern ? ~size : ~std::size_t(0), pattern ? h : 0);
+  };
+  std::vector<ConstraintIndex> order(count);
+  std::iota(order.begin(), order.end(), ConstraintIndex(0));
+  std::sort(order.begin(), order.end(), [&](ConstraintIndex a, ConstraintIndex b) {
+    return std::make_tuple(rank_key(shape[a]), anchor[a], a) < std::make_tuple(rank_key(shape[b]), anchor[b], b);
+  });
+  std::vector<std::set<Colour>> taken(graph.particle_count());
+  std::vector<Colour> colours(count, 0);
+  for (ConstraintIndex c : order) {
+    Colour k = 0;
+    const auto particles = graph.particles_of(c);
+    while (std::any_of(particles.begin(), particles.end(), [&](ParticleIndex p) { return taken[p].count(k) > 0; })) ++k;
+    for (ParticleIndex p : particles) taken[p].insert(k);
+    colours[c] = k;
+  }
+  return colours;
+}
+
+TEST(Stencil, EqualsFirstFitInRankAnchorIdOrderForAnyThreadCount) {
+  std::vector<std::pair<std::string, ConstraintGraph>> graphs;
+  for (const auto& mesh : meshes()) graphs.emplace_back(mesh.name, ConstraintGraph(mesh.graph));
+  // Several chunks of the parallel passes (64 K constraints), in mesh order and shuffled (the
+  // shuffled runs are not in anchor order, so they take the radix sort).
+  graphs.emplace_back("cloth 150x150", test::cloth_graph(150, 150, true));
+  std::vector<ParticleIndex> edges, bending;
+  graphs.emplace_back("shuffled cloth 120x120", shuffled_cloth_with_bending(120, 120, 7, edges, bending));
+  graphs.emplace_back("tet bar 30x8x8", test::tet_bar_graph(30, 8, 8));
+  for (const auto& [name, graph] : graphs) {
+    const std::vector<Colour> expected = reference_stencil_colours(graph);
+    for (int threads : {1, 2}) {
+      const Colouring colouring = colour_with_threads("stencil", graph, threads);
+      EXPECT_TRUE(std::equal(expected.begin(), expected.end(), colouring.colours().begin(),
+                             colouring.colours().end()))
+          << name << ", " << threads << " threads";
+    }
+  }
 }
 
 }  // namespace

@@ -209,7 +209,6 @@ int run_command(const RunOptions& options) {
     summary.add("contacts_mean", found.contacts_mean());
     summary.add("contacts_max", found.contacts_max);
     summary.add("seconds_collision", found.seconds_detection);
-    const SolverStatistics& statistics = solver.statistics();
     summary.add("contact_scheduling",
                 std::string(contact_scheduling_name(solver.settings().contact_scheduling)));
     summary.add("seconds_contact_scheduling", statistics.seconds_contact_scheduling);

@@ -209,11 +209,15 @@ int run_command(const RunOptions& options) {
     summary.add("contacts_mean", found.contacts_mean());
     summary.add("contacts_max", found.contacts_max);
     summary.add("seconds_collision", found.seconds_detection);
-    summary.add("contact_scheduling",
-                std::string(contact_scheduling_name(solver.settings().contact_scheduling)));
+    // What ran: modes jacobi and sequential keep their own way whatever the setting says.
+    const SolverMode mode = solver.settings().mode;
+    const bool coloured = solver.settings().contact_scheduling == ContactScheduling::coloured &&
+                          (mode == SolverMode::gs || mode == SolverMode::hybrid);
+    summary.add("contact_scheduling", mode == SolverMode::sequential ? std::string("sequential")
+                                      : coloured ? std::string("coloured")
+                                                 : std::string("jacobi"));
     summary.add("seconds_contact_scheduling", statistics.seconds_contact_scheduling);
-    if (solver.settings().contact_scheduling == ContactScheduling::coloured &&
-        statistics.contact_substeps != 0) {
+    if (coloured && statistics.contact_substeps != 0) {
       summary.add("contact_colours_mean", double(statistics.contact_colours_total) /
                                               double(statistics.contact_substeps));
       summary.add("contact_colours_max", statistics.contact_colours_max);

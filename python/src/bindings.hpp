@@ -4,6 +4,7 @@
 //   module.cpp   the module, exceptions, listings, scenes and meshes, graph and colouring
 //   model.cpp    tessera.Model and the per-family table (every family's parameters, one place)
 //   solver.cpp   tessera.Solver
+//   collisions.cpp  its collision stage, and the contact checks (penetration, intersections)
 //
 // Arrays of Real are float32 in the default build and float64 with TESSERA_DOUBLE; input
 // arrays of any numeric type are converted (a copy) to Real or to 32-bit indices.
@@ -23,6 +24,13 @@
 #include <tessera/core/error.hpp>
 #include <tessera/core/indices.hpp>
 #include <tessera/core/real.hpp>
+
+namespace tessera {
+class Solver;
+namespace io {
+struct Scene;
+}
+}  // namespace tessera
 
 namespace tessera::python {
 
@@ -55,6 +63,12 @@ py::array_t<T> copy_to_numpy(std::span<const T> values, std::vector<py::ssize_t>
   std::copy(values.begin(), values.end(), result.mutable_data());
   return result;
 }
+/// (M, arity) copy of element indices (triangles, tetrahedra) stored back to back.
+inline py::array_t<std::uint32_t> elements_to_numpy(const std::vector<std::uint32_t>& indices,
+                                                    std::size_t arity) {
+  return copy_to_numpy<std::uint32_t>(indices,
+                                      {py::ssize_t(indices.size() / arity), py::ssize_t(arity)});
+}
 /// (N, 3) copy of positions.
 py::array_t<Real> vectors_to_numpy(std::span<const Vector3r> points);
 
@@ -79,5 +93,9 @@ struct PyColouring {
 
 void bind_model(py::module_& m);
 void bind_solver(py::module_& m);
+/// The collision stage's methods on tessera.Solver and the contact checks of the module.
+void bind_collisions(py::module_& m, py::class_<Solver>& solver);
+/// A scene's collision settings as set_collisions' keyword arguments (None without any).
+py::object scene_collision_settings(const io::Scene& scene);
 
 }  // namespace tessera::python

@@ -106,11 +106,6 @@ py::array_t<Real> vectors_to_numpy(std::span<const Vector3r> points) {
 
 namespace {
 
-py::array_t<io::VertexIndex> elements_to_numpy(const std::vector<io::VertexIndex>& indices,
-                                               std::size_t arity) {
-  return copy_to_numpy<io::VertexIndex>(indices, {py::ssize_t(indices.size() / arity), py::ssize_t(arity)});
-}
-
 py::dict simulation_dict(const io::SimulationSettings& s) {
   py::dict d;
   d["gravity"] = py::make_tuple(double(s.gravity.x()), double(s.gravity.y()), double(s.gravity.z()));
@@ -313,6 +308,10 @@ PYBIND11_MODULE(_tessera, m) {
             return d;
           },
           "The keyword arguments of tessera.Solver that run this scene as `tessera run` does.")
+      .def("collision_settings", &scene_collision_settings,
+           "The keyword arguments of Solver.set_collisions that give this scene's contacts as\n"
+           "`tessera run` does (colliders, surface, solids, thickness, friction...), or None\n"
+           "when it has none.")
       .def("__repr__", [](const io::Scene& s) {
         return "<tessera.Scene '" + s.description.name + "': " +
                std::to_string(s.model.particles.size()) + " particles, " +

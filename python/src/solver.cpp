@@ -78,7 +78,8 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
                              double velocity_damping, double jacobi_relaxation,
                              std::size_t block_size, std::size_t hybrid_threshold,
                              bool report_residuals, bool record_convergence, bool check_finite,
-                             double divergence_rms, const std::string& sequential_order) {
+                             double divergence_rms, const std::string& sequential_order,
+                             const std::string& contact_scheduling) {
   SolverSettings s;
   s.mode = parse_solver_mode(mode);
   s.threads = threads;
@@ -103,31 +104,33 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
   s.check_finite = check_finite;
   s.divergence_rms = Real(divergence_rms);
   s.sequential_order = parse_sequential_order(sequential_order);
+  s.contact_scheduling = parse_contact_scheduling(contact_scheduling);
   return s;
 }
 
 }  // namespace
 
 void bind_solver(py::module_& m) {
-  py::class_<Solver>(m, "Solver",
+  py::class_<Solver> solver(m, "Solver",
                      "XPBD (or PBD) time stepping of a copy of a Model over a colouring's schedule.\n\n"
                      "Solver(model, colouring, mode='gs', threads=0, ...): colouring from\n"
                      "tessera.colour(model) (not needed for mode='sequential'); it is checked against\n"
                      "the model (ValueError if it does not fit). threads=0 uses every hardware\n"
                      "thread; any count gives bitwise the same result. positions/velocities copy\n"
-                     "(user order); scheduled_positions/scheduled_velocities are read-only views.")
+                     "(user order); scheduled_positions/scheduled_velocities are read-only views.");
+  solver
       .def(py::init([](const Model& model, const PyColouring* colouring, const std::string& mode,
                        std::size_t threads, const std::string& semantics, double time_step,
                        std::size_t substeps, std::size_t iterations, const py::object& gravity,
                        double velocity_damping, double jacobi_relaxation, std::size_t block_size,
                        std::size_t hybrid_threshold, bool report_residuals,
                        bool record_convergence, bool check_finite, double divergence_rms,
-                       const std::string& sequential_order) {
+                       const std::string& sequential_order, const std::string& contact_scheduling) {
              const SolverSettings settings = make_settings(
                  mode, threads, semantics, time_step, substeps, iterations, gravity,
                  velocity_damping, jacobi_relaxation, block_size, hybrid_threshold,
                  report_residuals, record_convergence, check_finite, divergence_rms,
-                 sequential_order);
+                 sequential_order, contact_scheduling);
              if (settings.mode == SolverMode::sequential && !colouring) return Solver(model, settings);
              if (!colouring)
                throw InvalidInput("solver: mode " + mode +
@@ -149,7 +152,9 @@ void bind_solver(py::module_& m) {
            py::arg("hybrid_threshold") = kDefaultHybridThreshold,
            py::arg("report_residuals") = true, py::arg("record_convergence") = false,
            py::arg("check_finite") = true, py::arg("divergence_rms") = 10.0,
-           py::arg("sequential_order") = "groups")
+           py::arg("sequential_order") = "groups",
+           py::arg("contact_scheduling") =
+               std::string(contact_scheduling_name(kDefaultContactScheduling)))
       .def(
           "step",
           [](Solver& solver, std::size_t steps) {
@@ -302,6 +307,7 @@ void bind_solver(py::module_& m) {
             d["report_residuals"] = st.report_residuals;
             d["record_convergence"] = st.record_convergence;
             d["check_finite"] = st.check_finite;
+            d["contact_scheduling"] = std::string(contact_scheduling_name(st.contact_scheduling));
             return d;
           },
           "The settings the solver runs with.")
@@ -311,6 +317,7 @@ void bind_solver(py::module_& m) {
                std::to_string(s.statistics().constraints) + " constraints, " +
                std::to_string(s.statistics().threads) + " threads>";
       });
+  bind_collisions(m, solver);
 }
 
 }  // namespace tessera::python

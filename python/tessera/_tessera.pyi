@@ -149,6 +149,8 @@ class Scene:
     def simulation(self) -> dict[str, Any]: ...
     def solver_settings(self) -> dict[str, Any]:
         """Keyword arguments of Solver that run this scene as `tessera run` does."""
+    def collision_settings(self) -> dict[str, Any] | None:
+        """Keyword arguments of Solver.set_collisions for this scene's contacts, or None."""
 
 def scene(spec: str) -> Scene:
     """'cloth', 'cloth:N', 'cloth:CxR', 'bar', 'bar:XxYxZ', a mesh file or a .json scene."""
@@ -257,6 +259,7 @@ class Solver:
         check_finite: bool = True,
         divergence_rms: float = 10.0,
         sequential_order: str = "groups",
+        contact_scheduling: str = "coloured",
     ) -> None: ...
     def step(self, steps: int = 1) -> None:
         """`steps` time steps; raises NumericalFailure (state restored). Releases the GIL."""
@@ -293,3 +296,32 @@ class Solver:
     def statistics(self) -> SolverStatistics: ...
     @property
     def settings(self) -> dict[str, Any]: ...
+    def set_collisions(
+        self,
+        colliders: Sequence[dict[str, Any]] = ...,
+        *,
+        surface_triangles: ArrayLike | None = None,
+        tetrahedra: ArrayLike | None = None,
+        thickness: float = 0.005,
+        friction: float = 0.4,
+        dynamic_friction: float = 0.3,
+        restitution: float = 0.0,
+        self_collision: bool = False,
+        self_collision_interval: int = 4,
+    ) -> None:
+        """Contacts every substep: colliders as dicts ('plane', 'sphere', 'box', 'capsule',
+        'mesh'), self-collision of surface_triangles, particle-tet contacts of tetrahedra."""
+    def clear_collisions(self) -> None: ...
+    @property
+    def collision_statistics(self) -> dict[str, Any] | None:
+        """Contacts per substep (mean, max, by kind), detection and scheduling seconds."""
+    def contact_counts(self) -> IndexArray:
+        """(N,) contacts of the last substep per particle, user numbering."""
+
+def penetration_depth(
+    positions: ArrayLike, colliders: Sequence[dict[str, Any]] = ..., tetrahedra: ArrayLike | None = None
+) -> float:
+    """The deepest point inside a collider or another solid (the run summary's penetration_max)."""
+
+def self_intersections(positions: ArrayLike, triangles: ArrayLike) -> int:
+    """Intersecting pairs of triangles sharing no vertex, counted exactly."""

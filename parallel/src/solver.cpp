@@ -507,9 +507,14 @@ void Solver::project(std::size_t iterations, Real dt) {
 }
 
 void Solver::reset_lambdas() {
-  const auto reset = [](ConstraintFamily, auto& batch) {
+  // In parallel chunks: on the 1024² cloth the multipliers are 25 MB per substep.
+  constexpr std::size_t kLambdaChunk = std::size_t(1) << 16;
+  const auto reset = [&](ConstraintFamily, auto& batch) {
     if (Real* lambda = lambda_of(batch))
-      std::fill(lambda, lambda + padded_size(batch.size()), Real(0));
+      parallel_chunks(padded_size(batch.size()), kLambdaChunk,
+                      [&](std::size_t first, std::size_t last) {
+                        std::fill(lambda + first, lambda + last, Real(0));
+                      });
   };
   schedule_.coloured().for_each(reset);
   schedule_.jacobi().constraints.for_each(reset);
@@ -552,6 +557,36 @@ void Solver::update_velocities(Real h) {
   });
 }
 
+void Solver::update_velocities_and_integrate(Real h) {
+  const Real scale = std::max(Real(0), Real(1) - settings_.velocity_damping * h) / h;
+  const Real gx = settings_.gravity.x() * h, gy = settings_.gravity.y() * h,
+             gz = settings_.gravity.z() * h;
+  parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) {
+      const Real x = state_.x[i], y = state_.y[i], z = state_.z[i];
+      if (!(state_.inverse_mass[i] > 0)) {
+        state_.velocity_x[i] = state_.velocity_y[i] = state_.velocity_z[i] = 0;
+        state_.previous_x[i] = x;
+        state_.previous_y[i] = y;
+        state_.previous_z[i] = z;
+        continue;
+      }
+      const Real vx = (x - state_.previous_x[i]) * scale + gx;
+      const Real vy = (y - state_.previous_y[i]) * scale + gy;
+      const Real vz = (z - state_.previous_z[i]) * scale + gz;
+      state_.previous_x[i] = x;
+      state_.previous_y[i] = y;
+      state_.previous_z[i] = z;
+      state_.velocity_x[i] = vx;
+      state_.velocity_y[i] = vy;
+      state_.velocity_z[i] = vz;
+      state_.x[i] = x + h * vx;
+      state_.y[i] = y + h * vy;
+      state_.z[i] = z + h * vz;
+    }
+  });
+}
+
 void Solver::step() {
   const auto start = Clock::now();
   const Real h = settings_.time_step / Real(settings_.substeps);
@@ -559,9 +594,11 @@ void Solver::step() {
   projection_dt_ = h;
   report_.history.clear();
   save_state();
+  bool predicted = false;  // by the fused pass at the end of the substep before
   for (std::size_t substep = 0; substep < settings_.substeps; ++substep) {
     const bool last = substep + 1 == settings_.substeps;
-    integrate(h);
+    if (!predicted) integrate(h);
+    predicted = false;
     if (collisions_) detect_contacts(h);
     reset_lambdas();
     if (last && settings_.report_residuals) report_.residual_before = residual();
@@ -580,6 +617,13 @@ void Solver::step() {
                                (statistics_.constraints + dynamic_count_ +
                                 contacts_.constraint_count +
                                 (contact_colours_ ? contact_colours_->constraint_count : 0));
+    // Between two substeps with no velocity pass, the velocity update and the next
+    // prediction are one pass over the particles.
+    if (!last && velocity_stages_.empty()) {
+      update_velocities_and_integrate(h);
+      predicted = true;
+      continue;
+    }
     update_velocities(h);
     for (const Stage& stage : velocity_stages_) run_stage(stage, projection);
     if (last && settings_.report_residuals) report_.residual_after = residual();

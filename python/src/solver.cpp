@@ -111,14 +111,14 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
 }  // namespace
 
 void bind_solver(py::module_& m) {
-  py::class_<Solver> solver(m, "Solver",
+  py::class_<Solver> solver_class(m, "Solver",
                      "XPBD (or PBD) time stepping of a copy of a Model over a colouring's schedule.\n\n"
                      "Solver(model, colouring, mode='gs', threads=0, ...): colouring from\n"
                      "tessera.colour(model) (not needed for mode='sequential'); it is checked against\n"
                      "the model (ValueError if it does not fit). threads=0 uses every hardware\n"
                      "thread; any count gives bitwise the same result. positions/velocities copy\n"
                      "(user order); scheduled_positions/scheduled_velocities are read-only views.");
-  solver
+  solver_class
       .def(py::init([](const Model& model, const PyColouring* colouring, const std::string& mode,
                        std::size_t threads, const std::string& semantics, double time_step,
                        std::size_t substeps, std::size_t iterations, const py::object& gravity,
@@ -317,7 +317,7 @@ void bind_solver(py::module_& m) {
                std::to_string(s.statistics().constraints) + " constraints, " +
                std::to_string(s.statistics().threads) + " threads>";
       });
-  bind_collisions(m, solver);
+  bind_collisions(m, solver_class);
 }
 
 }  // namespace tessera::python

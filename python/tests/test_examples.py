@@ -17,12 +17,22 @@ def run_python(*arguments):
 def test_readme_example_runs_as_written():
     readme = (SOURCE_DIR / "README.md").read_text()
     section = readme.split("\n## Python\n", 1)[1].split("\n## ", 1)[0]
-    (code,) = re.findall(r"```python\n(.*?)```", section, re.S)
+    code, _ = re.findall(r"```python\n(.*?)```", section, re.S)
     assert len(code.strip().splitlines()) == 10
     lines = run_python("-c", code).splitlines()
     assert [line.split()[0] for line in lines[:-1]] == list(tessera.strategies())
     residual, *extent = lines[-1].replace("[", " ").replace("]", " ").split()
     assert float(residual) > 0 and all(float(e) > 0 for e in extent)
+
+
+def test_readme_collision_example_runs_as_written():
+    readme = (SOURCE_DIR / "README.md").read_text()
+    section = readme.split("\n## Python\n", 1)[1].split("\n## ", 1)[0]
+    _, code = re.findall(r"```python\n(.*?)```", section, re.S)
+    contacts_mean, most_at_a_particle, penetration = run_python(
+        "-c", "import tessera\n" + code).split()
+    assert float(contacts_mean) > 100 and int(most_at_a_particle) > 0
+    assert float(penetration) <= 0.005
 
 
 def test_compare_strategies_covers_every_scene_and_strategy():

@@ -181,6 +181,54 @@ TEST(Solver, GaussSeidelConservesLinearMomentumOfAFreeBody) {
   }
 }
 
+// Symplectic Euler over k substeps of h from x0 with v0 under g: v_k = v0 + k·g·h and
+// x_k = x0 + k·h·v0 + g·h²·k(k+1)/2, through the fused pass (velocity update and the next
+// prediction in one) between substeps and the separate ones around the step's last;
+// damping scales each (x − x_prev)/h by (1 − d·h).
+TEST(Solver, FreeParticlesFollowSymplecticEulerAcrossSubstepsAndSteps) {
+  Model model;
+  // Near the origin, so float's rounding of (x − x_prev)/h stays far below one substep's g·h.
+  model.particles = ParticleState(std::vector<Vector3r>{Vector3r(0, 0, 0), Vector3r(1, 0, 0)},
+                                  std::vector<Real>{Real(1), Real(0)});
+  for (const double damping : {0.0, 0.5}) {
+    SolverSettings settings;
+    settings.mode = SolverMode::gs;
+    settings.substeps = 7;
+    settings.iterations = 2;
+    settings.velocity_damping = Real(damping);
+    Solver solver(model, Colouring(), settings);
+    solver.set_velocity(0, Vector3r(1, 2, -3));
+    const int steps = 5;
+    for (int s = 0; s < steps; ++s) solver.step();
+    // The same recurrence in double.
+    const double h = double(settings.time_step) / double(settings.substeps);
+    const double scale = 1 - damping * h;
+    double x[3] = {0, 0, 0}, v[3] = {1, 2, -3};
+    const double g[3] = {0, -9.81, 0};
+    for (int k = 0; k < steps * int(settings.substeps); ++k)
+      for (int a = 0; a < 3; ++a) {
+        const double previous = x[a];
+        v[a] += g[a] * h;
+        x[a] += h * v[a];
+        v[a] = (x[a] - previous) / h * scale;
+      }
+    const Vector3r p = solver.position(0), u = solver.velocity(0);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_NEAR(double(p[a]), x[a], 2e-5) << "damping " << damping << " axis " << a;
+      // One substep's gravity is g·h = 0.023: a substep lost or doubled shows.
+      EXPECT_NEAR(double(u[a]), v[a], 2e-3) << "damping " << damping << " axis " << a;
+    }
+    if (damping == 0) {
+      const double t = steps * double(settings.time_step);
+      const double k = steps * double(settings.substeps);
+      EXPECT_NEAR(double(p.y()), 2 * t - 9.81 * h * h * k * (k + 1) / 2, 2e-5);
+      EXPECT_NEAR(double(u.y()), 2 - 9.81 * t, 2e-3);
+    }
+    EXPECT_EQ(solver.position(1), Vector3r(1, 0, 0)) << "static";
+    EXPECT_EQ(solver.velocity(1), Vector3r::Zero()) << "static";
+  }
+}
+
 TEST(Solver, LambdaAndPositionsMapBackToTheUsersNumbering) {
   // Disjoint distance constraints, each stretched by its own amount: one XPBD iteration
   // gives λ = -C / (w0 + w1 + α̃) per constraint whatever the order, so a mix-up shows.

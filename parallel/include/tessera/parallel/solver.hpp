@@ -294,6 +294,9 @@ class Solver {
                       std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>& source,
                       bool scheduled_numbering);
   void update_velocities(Real h);
+  /// update_velocities(h) then integrate(h) in one pass over the particles (the same
+  /// arithmetic per particle, so the same bits): between two substeps with no velocity pass.
+  void update_velocities_and_integrate(Real h);
   /// The corrected positions of a Jacobi set's incidences.
   struct JacobiWork {
     AlignedVector<Real> x, y, z;

@@ -90,6 +90,20 @@ struct Particles {
   }
 };
 
+/// Whether the point sets a and b are farther apart than `within` along some axis: then no
+/// point of the one's hull is within `within` of the other's (every distance is at least its
+/// largest axis difference), so the exact distance test can be skipped with the same answer.
+template <std::size_t N, std::size_t M>
+bool separated_along_an_axis(const Vector3r (&a)[N], const Vector3r (&b)[M], Real within) {
+  for (int axis = 0; axis < 3; ++axis) {
+    Real a_lo = a[0][axis], a_hi = a_lo, b_lo = b[0][axis], b_hi = b_lo;
+    for (std::size_t i = 1; i < N; ++i) a_lo = std::min(a_lo, a[i][axis]), a_hi = std::max(a_hi, a[i][axis]);
+    for (std::size_t i = 1; i < M; ++i) b_lo = std::min(b_lo, b[i][axis]), b_hi = std::max(b_hi, b[i][axis]);
+    if (b_lo - a_hi > within || a_lo - b_hi > within) return true;
+  }
+  return false;
+}
+
 template <class Body>
 void parallel_over(std::size_t n, Body&& body) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 2048),
@@ -269,8 +283,10 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
         const std::uint32_t p = pair.first, t = pair.second;
         const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
         const Real within = reach.distance + motion_[p] + std::max({motion_[a], motion_[b], motion_[c]});
-        if (detail::squared_point_triangle_distance(particles.start(p), particles.start(a),
-                                                    particles.start(b), particles.start(c)) <
+        const Vector3r point[1] = {particles.start(p)};
+        const Vector3r corners[3] = {particles.start(a), particles.start(b), particles.start(c)};
+        if (separated_along_an_axis(point, corners, within)) return;
+        if (detail::squared_point_triangle_distance(point[0], corners[0], corners[1], corners[2]) <
             within * within)
           buffer.push_back(pair);
       },
@@ -283,8 +299,10 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
         const std::uint32_t p2 = edges_[2 * pair.second], p3 = edges_[2 * pair.second + 1];
         const Real within = reach.distance + std::max(motion_[p0], motion_[p1]) +
                             std::max(motion_[p2], motion_[p3]);
-        if (detail::squared_segment_distance(particles.start(p0), particles.start(p1),
-                                             particles.start(p2), particles.start(p3)) <
+        const Vector3r first[2] = {particles.start(p0), particles.start(p1)};
+        const Vector3r second[2] = {particles.start(p2), particles.start(p3)};
+        if (separated_along_an_axis(first, second, within)) return;
+        if (detail::squared_segment_distance(first[0], first[1], second[0], second[1]) <
             within * within)
           buffer.push_back(pair);
       },

@@ -54,7 +54,8 @@ void split_into_blocks(ConstraintFamily family, std::size_t begin, std::size_t e
   const std::size_t per_thread =
       (end - begin + kBlocksPerThread * options.threads - 1) / (kBlocksPerThread * options.threads);
   const std::size_t block_size =
-      std::clamp(round_up(per_thread, kMaxLanes), kMaxLanes, options.block_size);
+      std::clamp(round_up(per_thread, kMaxLanes), std::min(kSmallestSplitBlock, options.block_size),
+                 options.block_size);
   for (std::size_t b = begin; b < end; b += block_size)
     blocks.push_back({family, std::uint32_t(b), std::uint32_t(std::min(end, b + block_size))});
 }

@@ -168,13 +168,14 @@ TEST(Schedule, BlocksShrinkSoThatEveryThreadGetsWork) {
       const std::size_t size = schedule.phase_sizes()[phase];
       const std::size_t blocks = schedule.phase_blocks(phase).size();
       // Never above block_size; at least two blocks per thread while blocks can shrink; the
-      // smallest blocks are one vector wide.
+      // smallest blocks split for threads are kSmallestSplitBlock wide (a smaller one costs a
+      // task more than its projections).
       for (const ScheduleBlock& block : schedule.phase_blocks(phase))
         EXPECT_LE(block.end - block.begin, 512u);
-      if (size >= 4 * threads * kMaxLanes) {
+      if (size >= 4 * threads * kSmallestSplitBlock) {
         EXPECT_GE(blocks, 2 * threads);
       } else {
-        EXPECT_EQ(blocks, (size + kMaxLanes - 1) / kMaxLanes);
+        EXPECT_EQ(blocks, (size + kSmallestSplitBlock - 1) / kSmallestSplitBlock);
       }
     }
     check_layout(model, colouring, schedule);

@@ -83,7 +83,7 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
                       "another, default) or input");
   command->add_option("--contact-scheduling", options.contact_scheduling,
                       "modes gs and hybrid: jacobi (the contacts as one Jacobi set) or coloured "
-                      "(first-fit on top of the static colours) (default coloured)");
+                      "(first-fit, swept Gauss-Seidel after the model's constraints) (default coloured)");
   command->add_option("--divergence-rms", options.divergence_rms,
                       "a step that ends with an RMS residual above this fails (default 10; inf "
                       "turns the check off)")

@@ -1,5 +1,5 @@
-// First-fit colouring of each substep's contacts against the static phases (see
-// contact_colouring.hpp for the picture): mask, pick, lay out.
+// First-fit colouring of each substep's contacts (see contact_colouring.hpp for the picture):
+// mask, pick, lay out.
 #include "contact_colouring.hpp"
 
 #include <bit>
@@ -27,29 +27,7 @@ std::size_t round_up(std::size_t n, std::size_t multiple) {
 
 }  // namespace
 
-std::vector<std::uint64_t> static_phase_masks(const Schedule& schedule,
-                                              std::span<const Real> inverse_mass) {
-  std::vector<std::uint64_t> masks(inverse_mass.size(), 0);
-  if (schedule.mode() == SolverMode::sequential) return masks;
-  const std::size_t phases = std::min(schedule.phase_count(), kContactColours);
-  const ConstraintSets& sets = schedule.coloured();
-  for (std::size_t k = 0; k < phases; ++k) {
-    const std::uint64_t bit = std::uint64_t(1) << k;
-    for (const ScheduleBlock& block : schedule.phase_blocks(k)) {
-      sets.for_each([&](ConstraintFamily family, const auto& batch) {
-        if (family != block.family) return;
-        for (std::size_t j = block.begin; j < block.end; ++j)
-          for_each_particle(batch, j, [&](ParticleIndex p) {
-            if (inverse_mass[p] > 0) masks[p] |= bit;
-          });
-      });
-    }
-  }
-  return masks;
-}
-
 ColouredContacts colour_contacts(const ConstraintSets& found,
-                                 std::span<const std::uint64_t> static_masks,
                                  std::span<std::uint64_t> contact_masks,
                                  std::span<const Real> inverse_mass,
                                  const ScheduleOptions& options) {
@@ -63,7 +41,7 @@ ColouredContacts colour_contacts(const ConstraintSets& found,
     for (std::size_t j = 0; j < batch.size(); ++j) {
       std::uint64_t taken = 0;
       for_each_particle(batch, j, [&](ParticleIndex p) {
-        if (inverse_mass[p] > 0) taken |= static_masks[p] | contact_masks[p];
+        if (inverse_mass[p] > 0) taken |= contact_masks[p];
       });
       if (taken == ~std::uint64_t(0)) {
         colour[j] = std::uint8_t(kContactColours);

@@ -207,26 +207,19 @@ bool Solver::colours_contacts() const {
 }
 
 void Solver::build_stages() {
-  stages_.clear();
+  stages_.assign(schedule_.iteration_stages().begin(), schedule_.iteration_stages().end());
   velocity_stages_.assign(schedule_.velocity_stages().begin(), schedule_.velocity_stages().end());
-  // Contact colour k right after coloured phase k (contact_colouring.hpp).
   const std::size_t contact_colours = contact_colours_ ? contact_colours_->colour_count() : 0;
   const auto contact_colour_stage = [&](std::size_t k) {
     return Stage{StageKind::coloured_phase, StageSet::contact_colours,
                  contact_colours_->colour_offsets[k], contact_colours_->colour_offsets[k + 1]};
   };
-  std::size_t next_colour = 0;
-  for (const Stage& stage : schedule_.iteration_stages()) {
-    stages_.push_back(stage);
-    if (stage.kind == StageKind::coloured_phase && next_colour < contact_colours)
-      stages_.push_back(contact_colour_stage(next_colour++));
-  }
-  // The dynamic constraints, then the contact colours past the static ones, then the
+  // The dynamic constraints, then the contact colours (contact_colouring.hpp), then the
   // contacts' Jacobi set: each swept after the schedule's.
   for (const StageSet set : {StageSet::dynamic, StageSet::contact_colours, StageSet::contacts}) {
     if (set == StageSet::contact_colours) {
-      for (; next_colour < contact_colours; ++next_colour)
-        stages_.push_back(contact_colour_stage(next_colour));
+      for (std::size_t k = 0; k < contact_colours; ++k)
+        stages_.push_back(contact_colour_stage(k));
       for (std::size_t k = 0; k < contact_colours; ++k) {
         const auto blocks = contact_colours_->colour_blocks(k);
         if (std::any_of(blocks.begin(), blocks.end(), [](const ScheduleBlock& b) {
@@ -816,10 +809,7 @@ void Solver::set_collisions(CollisionSettings settings,
   const std::vector<std::uint32_t> tets = scheduled(tetrahedra, 4, "tetrahedron", "solid", "tetrahedron");
   collisions_ = std::make_unique<CollisionStage>(std::move(settings), std::move(triangles),
                                                  state_.size(), tets);
-  if (colours_contacts() && static_phase_masks_.empty()) {
-    static_phase_masks_ = detail::static_phase_masks(schedule_, inverse_masses());
-    contact_masks_.assign(state_.size(), 0);
-  }
+  if (colours_contacts()) contact_masks_.assign(state_.size(), 0);
 }
 
 void Solver::clear_collisions() {
@@ -843,7 +833,7 @@ void Solver::detect_contacts(Real h) {
     contacts_ = extra_set(contacts_found_, contact_source_, true);
   } else {
     contact_colours_ = std::make_unique<detail::ColouredContacts>(detail::colour_contacts(
-        contacts_found_, static_phase_masks_, contact_masks_, inverse_masses(),
+        contacts_found_, contact_masks_, inverse_masses(),
         schedule_.options()));
     // The overflow as a Jacobi set; its slots lead back to the found contacts.
     ConstraintSets overflow;
@@ -862,11 +852,9 @@ void Solver::detect_contacts(Real h) {
     if (overflowed != 0) contacts_ = extra_set(overflow, contact_source_, true);
     for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
       for (std::uint32_t& s : contact_source_[f]) s = contact_colours_->overflow[f][s];
-    const std::size_t past_static =
-        contact_colours_->colour_count() -
-        std::min(contact_colours_->colour_count(), schedule_.phase_count());
-    statistics_.contact_colours_total += past_static;
-    statistics_.contact_colours_max = std::max(statistics_.contact_colours_max, past_static);
+    const std::size_t colours = contact_colours_->colour_count();
+    statistics_.contact_colours_total += colours;
+    statistics_.contact_colours_max = std::max(statistics_.contact_colours_max, colours);
     statistics_.contacts_overflowed += overflowed;
   }
   contacts_work_.bind(contacts_);

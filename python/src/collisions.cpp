@@ -168,8 +168,8 @@ void bind_collisions(py::module_& m, py::class_<Solver>& solver) {
             return d;
           },
           "None without collisions; else the contacts per substep (mean, max, and of the last\n"
-          "substep by kind), detection and scheduling seconds, the most contact colours past\n"
-          "the static ones in a substep, and the contacts that found no colour.")
+          "substep by kind), detection and scheduling seconds, the most contact colours in a\n"
+          "substep, and the contacts that found no colour.")
       .def(
           "contact_counts",
           [](const Solver& s) {

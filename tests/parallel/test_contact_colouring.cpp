@@ -1,12 +1,12 @@
-// Contacts coloured on top of the static colouring (parallel/src/contact_colouring.hpp): the
+// Each substep's contacts coloured among themselves (parallel/src/contact_colouring.hpp): the
 // guarantee the solver relies on, checked constraint by constraint. Every contact is placed
-// once (a colour or the overflow); no two contacts of a colour share a movable particle; a
-// contact in colour k shares none with static phase k (it runs right after it); a shared
-// static particle separates nothing; a particle in more than 64 contacts sends the rest to
-// the overflow; the scratch masks come back zero.
+// once (a colour or the overflow) and each slot holds the contact it names; no two contacts
+// of a colour share a movable particle; a shared static particle separates nothing; a
+// particle in more than 64 contacts sends the rest to the overflow; first-fit uses no more
+// colours than the most contacts at a particle allows; the scratch masks come back zero.
 #include <gtest/gtest.h>
 
-#include <bit>
+#include <algorithm>
 #include <random>
 #include <set>
 #include <vector>
@@ -15,24 +15,18 @@
 #include <tessera/parallel/schedule.hpp>
 
 #include "contact_colouring.hpp"
-#include "scenes.hpp"
 
 namespace tessera {
 namespace {
 
-/// A 10 × 10 cloth with its edges as the model; vertex 0 is static.
+/// The vertices of a 10 × 10 cloth; vertex 0 is static.
 struct Cloth {
-  Model model;
   std::vector<Vector3r> positions;
   std::vector<Real> inverse_mass;
   Cloth() {
-    const io::ClothGrid grid = io::make_cloth_grid(10, 10, Real(0.1));
-    positions = grid.positions;
+    positions = io::make_cloth_grid(10, 10, Real(0.1)).positions;
     inverse_mass.assign(positions.size(), Real(1));
     inverse_mass[0] = 0;
-    model.particles = ParticleState(positions, inverse_mass);
-    model.constraints.distance =
-        make_distance_constraints({grid.edge_indices, positions, Real(1), Real(0)});
   }
 };
 
@@ -48,7 +42,7 @@ std::array<ParticleIndex, 2> ends(const DistanceConstraints& batch, std::size_t 
 }
 
 void expect_valid(const detail::ColouredContacts& coloured, const ConstraintSets& found,
-                  const Schedule& schedule, const std::vector<Real>& inverse_mass) {
+                  const std::vector<Real>& inverse_mass) {
   const auto& slots = coloured.source[std::size_t(ConstraintFamily::distance)];
   const auto& overflow = coloured.overflow[std::size_t(ConstraintFamily::distance)];
   const DistanceConstraints& laid_out = coloured.constraints.distance;
@@ -68,23 +62,13 @@ void expect_valid(const detail::ColouredContacts& coloured, const ConstraintSets
       for (std::uint32_t j = block.begin; j < block.end; ++j)
         for (const ParticleIndex p : ends(laid_out, j))
           if (inverse_mass[p] > 0) EXPECT_TRUE(moved.insert(p).second) << "colour " << k;
-    if (k >= schedule.phase_count()) continue;
-    for (const ScheduleBlock& block : schedule.phase_blocks(k))
-      for (std::uint32_t j = block.begin; j < block.end; ++j)
-        for (const ParticleIndex p : ends(schedule.coloured().distance, j))
-          EXPECT_EQ(moved.count(p), 0u) << "static phase " << k << " moves " << p;
   }
 }
 
-TEST(ContactColouring, EachColourSharesNoMovableParticleWithItselfOrItsStaticPhase) {
+TEST(ContactColouring, NoColourMovesAParticleTwice) {
   const Cloth cloth;
   ScheduleOptions options;
-  const Colouring colouring = test::colour_model(cloth.model);
-  const Schedule schedule(cloth.model, &colouring, options);
-  ASSERT_TRUE(schedule.particle_new_to_old().empty()) << "the test's numbering is the schedule's";
-  ASSERT_GT(schedule.phase_count(), 2u);
-  const auto masks = detail::static_phase_masks(schedule, cloth.inverse_mass);
-  // Random pairs (the cloth is not renumbered by greedy, so user = scheduled numbering).
+  // Random pairs of the cloth's vertices.
   std::mt19937 random(7);
   std::uniform_int_distribution<ParticleIndex> any(0, ParticleIndex(cloth.positions.size() - 1));
   std::vector<ParticleIndex> pairs;
@@ -95,14 +79,21 @@ TEST(ContactColouring, EachColourSharesNoMovableParticleWithItselfOrItsStaticPha
   ConstraintSets found;
   found.distance = contacts_between(pairs, cloth.positions);
   std::vector<std::uint64_t> scratch(cloth.positions.size(), 0);
-  const auto coloured =
-      detail::colour_contacts(found, masks, scratch, cloth.inverse_mass, options);
-  EXPECT_GT(coloured.colour_count(), schedule.phase_count()) << "300 contacts need colours of their own";
+  const auto coloured = detail::colour_contacts(found, scratch, cloth.inverse_mass, options);
   EXPECT_EQ(coloured.constraint_count, found.size());
-  expect_valid(coloured, found, schedule, cloth.inverse_mass);
+  expect_valid(coloured, found, cloth.inverse_mass);
+  // A movable particle's contacts need a colour each; first-fit finds one among the first
+  // (contacts at the contact's two movable particles − 1).
+  std::vector<std::size_t> degree(cloth.positions.size(), 0);
+  for (std::size_t c = 0; c < found.distance.size(); ++c)
+    for (const ParticleIndex p : ends(found.distance, c))
+      if (cloth.inverse_mass[p] > 0) ++degree[p];
+  const std::size_t most = *std::max_element(degree.begin(), degree.end());
+  EXPECT_GE(coloured.colour_count(), most);
+  EXPECT_LE(coloured.colour_count(), 2 * most - 1);
   for (const std::uint64_t word : scratch) EXPECT_EQ(word, 0u);
   // The same input gives the same layout.
-  const auto again = detail::colour_contacts(found, masks, scratch, cloth.inverse_mass, options);
+  const auto again = detail::colour_contacts(found, scratch, cloth.inverse_mass, options);
   EXPECT_EQ(again.source, coloured.source);
   EXPECT_EQ(again.colour_offsets, coloured.colour_offsets);
 }
@@ -110,12 +101,7 @@ TEST(ContactColouring, EachColourSharesNoMovableParticleWithItselfOrItsStaticPha
 TEST(ContactColouring, AStaticParticleSeparatesNothingAndTheSixtyFifthContactOverflows) {
   const Cloth cloth;
   ScheduleOptions options;
-  const Colouring colouring = test::colour_model(cloth.model);
-  const Schedule schedule(cloth.model, &colouring, options);
-  ASSERT_TRUE(schedule.particle_new_to_old().empty()) << "the test's numbering is the schedule's";
-  const auto masks = detail::static_phase_masks(schedule, cloth.inverse_mass);
-  EXPECT_EQ(masks[0], 0u) << "a static particle carries no colour";
-  // 80 contacts from static particle 0 to 80 different particles, then 80 on particle 55.
+  // 80 contacts from static particle 0 to 80 different particles, then 79 on particle 55.
   std::vector<ParticleIndex> pairs;
   for (ParticleIndex p = 1; p <= 80; ++p) pairs.insert(pairs.end(), {0, p});
   for (ParticleIndex p = 1; p <= 80; ++p)
@@ -123,18 +109,20 @@ TEST(ContactColouring, AStaticParticleSeparatesNothingAndTheSixtyFifthContactOve
   ConstraintSets found;
   found.distance = contacts_between(pairs, cloth.positions);
   std::vector<std::uint64_t> scratch(cloth.positions.size(), 0);
-  const auto coloured =
-      detail::colour_contacts(found, masks, scratch, cloth.inverse_mass, options);
-  expect_valid(coloured, found, schedule, cloth.inverse_mass);
-  // Particle 55's contacts: 64 colours minus the static phases it is in, the rest overflow.
-  const std::size_t phases_of_55 = std::size_t(std::popcount(masks[55]));
+  const auto coloured = detail::colour_contacts(found, scratch, cloth.inverse_mass, options);
+  expect_valid(coloured, found, cloth.inverse_mass);
+  // The 80 contacts on the static particle all take colour 0 (they share nothing movable);
+  // then each of 55's contacts takes the next colour its other particle leaves free: colour 0
+  // is taken by that particle's contact with particle 0, so 55's take 1 ... 63, and the
+  // 16 left over overflow.
+  EXPECT_EQ(coloured.colour_count(), detail::kContactColours);
   const auto& overflow = coloured.overflow[std::size_t(ConstraintFamily::distance)];
-  std::size_t on_55 = 0;
-  for (const std::uint32_t c : overflow) on_55 += ends(found.distance, c)[0] == 55;
-  // Each of 55's contacts also meets its other particle, which may cost a colour more, so
-  // at least the count a lone particle 55 would send.
-  EXPECT_GE(on_55, 79 - (detail::kContactColours - phases_of_55));
-  EXPECT_EQ(overflow.size(), on_55) << "the contacts on the static particle all found colours";
+  EXPECT_EQ(overflow.size(), 79u - (detail::kContactColours - 1));
+  for (const std::uint32_t c : overflow) EXPECT_EQ(ends(found.distance, c)[0], 55u);
+  const auto& first = coloured.colour_blocks(0);
+  std::size_t in_colour_0 = 0;
+  for (const ScheduleBlock& block : first) in_colour_0 += block.end - block.begin;
+  EXPECT_EQ(in_colour_0, 80u) << "a static particle separates nothing";
   for (const std::uint64_t word : scratch) EXPECT_EQ(word, 0u);
 }
 

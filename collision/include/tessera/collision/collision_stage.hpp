@@ -1,5 +1,5 @@
 // The collision stage: contacts found from the positions every substep, handed to the solver
-// as constraint batches it schedules (coloured on top of the static colours, or a Jacobi set;
+// as constraint batches it schedules (coloured among themselves, or a Jacobi set;
 // SolverSettings::contact_scheduling) and projects like any family.
 //
 //   per substep, after the prediction (x = predicted, previous = start of the substep):

@@ -49,10 +49,10 @@ enum class ContactScheduling : std::uint8_t {
   /// One Jacobi set of their own after the model's constraints: every contact from the same
   /// positions, each particle moved by the mean of its contacts' corrections.
   jacobi,
-  /// Coloured on top of the static colouring (contact_colouring.hpp): each contact, first-fit,
-  /// takes the first colour none of its movable particles already carries (a static phase's,
-  /// or a contact's of this substep) and runs as Gauss–Seidel right after that static phase;
-  /// contacts that find none of the 64 colours go to a Jacobi set (the overflow).
+  /// Coloured among themselves (contact_colouring.hpp): each contact, first-fit, takes the
+  /// first colour none of its movable particles' contacts took, and the colours run as
+  /// Gauss–Seidel phases after the model's constraints; contacts that find none of the 64
+  /// colours go to a Jacobi set (the overflow).
   coloured,
 };
 

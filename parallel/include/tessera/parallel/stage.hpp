@@ -7,8 +7,8 @@
 //   hybrid      coloured phases of the large colours │ Jacobi projection │ reduction │ (dynamic ...)
 //   sequential  sequential sweep (every family range in input order) │ (dynamic: sequential sweep)
 //   then, with a collision stage, the substep's contacts like the dynamic constraints, or
-//   (ContactScheduling::coloured) contact colour k right after coloured phase k, the colours
-//   past the static ones after the dynamic constraints, then the overflow's Jacobi set
+//   (ContactScheduling::coloured) their colours one phase each after the dynamic
+//   constraints, then the overflow's Jacobi set
 //   after the velocity update: a velocity pass per phase (or set) holding a family with a
 //   velocity solve (kTraits.velocity_pass), none otherwise
 //
@@ -46,8 +46,8 @@ enum class StageSet : std::uint8_t {
   /// The contacts the collision stage made for this substep (Solver::set_collisions) that run
   /// as a Jacobi set (ContactScheduling::jacobi, or the overflow of the coloured one).
   contacts,
-  /// The substep's contacts coloured on top of the static phases (ContactScheduling::coloured):
-  /// the blocks of one contact colour.
+  /// The substep's contacts coloured among themselves (ContactScheduling::coloured): the
+  /// blocks of one contact colour.
   contact_colours,
 };
 

@@ -114,15 +114,8 @@ void FrameOutput::write(std::size_t frame, double time, std::span<const Vector3r
 }
 
 std::vector<Real> contacts_per_particle(const Solver& solver) {
-  std::vector<Real> counts(solver.particle_count(), 0);
-  const Schedule& schedule = solver.schedule();
-  solver.contacts().for_each([&](ConstraintFamily, const auto& batch) {
-    // Contacts are fixed-arity families (shape matching, with its clusters, never is one).
-    if constexpr (requires { batch.particles.particle; })
-      for (const auto& slot : batch.particles.particle)
-        for (std::size_t c = 0; c < batch.size(); ++c) counts[schedule.user_particle(slot[c])] += 1;
-  });
-  return counts;
+  const std::vector<std::uint32_t> counts = solver.contact_counts();
+  return std::vector<Real>(counts.begin(), counts.end());
 }
 
 }  // namespace tessera::cli

@@ -36,6 +36,25 @@
 namespace tessera {
 namespace detail {
 
+namespace {
+
+/// The one-word first-fit step: the lowest colour none of particles[begin, end) carries in
+/// `bits`, taken for them and written to `colour`; false (nothing changed) when all 64 are
+/// taken (a 65th colour: the general loop, whose sets grow, takes over).
+inline bool first_fit_in_one_word(std::uint64_t* bits, const ParticleIndex* particles,
+                                  std::uint32_t begin, std::uint32_t end, Colour& colour) {
+  std::uint64_t taken = 0;
+  for (std::uint32_t j = begin; j < end; ++j) taken |= bits[particles[j]];
+  if (taken == ~std::uint64_t(0)) return false;
+  const Colour k = static_cast<Colour>(std::countr_one(taken));
+  const std::uint64_t bit = std::uint64_t(1) << k;
+  for (std::uint32_t j = begin; j < end; ++j) bits[particles[j]] |= bit;
+  colour = k;
+  return true;
+}
+
+}  // namespace
+
 std::size_t first_fit_in_order(const ConstraintGraph& graph, std::span<const ConstraintIndex> order,
                                ParticleColourMasks& masks, std::span<Colour> colours) {
   constexpr std::size_t kPrefetchDistance = 16;
@@ -62,15 +81,8 @@ std::size_t first_fit_in_order(const ConstraintGraph& graph, std::span<const Con
           __builtin_prefetch(&bits[particles[j]]);
       }
       const ConstraintIndex c = order[i];
-      const std::uint32_t begin = offsets[c], end = offsets[c + 1];
-      std::uint64_t taken = 0;
-      for (std::uint32_t j = begin; j < end; ++j) taken |= bits[particles[j]];
-      if (taken == ~std::uint64_t(0)) break;  // a 65th colour: the general loop grows the sets
-      const Colour k = static_cast<Colour>(std::countr_one(taken));
-      const std::uint64_t bit = std::uint64_t(1) << k;
-      for (std::uint32_t j = begin; j < end; ++j) bits[particles[j]] |= bit;
-      colours[c] = k;
-      largest = std::max(largest, k);
+      if (!first_fit_in_one_word(bits, particles, offsets[c], offsets[c + 1], colours[c])) break;
+      largest = std::max(largest, colours[c]);
     }
   }
   for (; i < order.size(); ++i) {
@@ -107,14 +119,8 @@ std::size_t first_fit_in_id_order(const ConstraintGraph& graph, ParticleColourMa
       if (c + kPrefetchDistance < count)
         for (std::uint32_t j = offsets[c + kPrefetchDistance]; j < offsets[c + kPrefetchDistance + 1]; ++j)
           __builtin_prefetch(&bits[particles[j]]);
-      std::uint64_t taken = 0;
-      for (std::uint32_t j = begin; j < end; ++j) taken |= bits[particles[j]];
-      if (taken == ~std::uint64_t(0)) break;  // a 65th colour: the general loop grows the sets
-      const Colour k = static_cast<Colour>(std::countr_one(taken));
-      const std::uint64_t bit = std::uint64_t(1) << k;
-      for (std::uint32_t j = begin; j < end; ++j) bits[particles[j]] |= bit;
-      colours[c] = k;
-      largest = std::max(largest, k);
+      if (!first_fit_in_one_word(bits, particles, begin, end, colours[c])) break;
+      largest = std::max(largest, colours[c]);
     }
   }
   for (; c < count; ++c) {

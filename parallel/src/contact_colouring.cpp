@@ -21,10 +21,6 @@ void for_each_particle(const Batch& batch, std::size_t j, Visit&& visit) {
   }
 }
 
-std::size_t round_up(std::size_t n, std::size_t multiple) {
-  return (n + multiple - 1) / multiple * multiple;
-}
-
 }  // namespace
 
 ColouredContacts colour_contacts(const ConstraintSets& found,

@@ -19,6 +19,9 @@ namespace tessera::detail {
 /// 512 but must feed 64 threads). Block boundaries never change a result: the constraints of
 /// a range are independent and each SIMD lane computes alone.
 inline constexpr std::size_t kBlocksPerThread = 4;
+inline std::size_t round_up(std::size_t n, std::size_t multiple) {
+  return (n + multiple - 1) / multiple * multiple;
+}
 void split_into_blocks(ConstraintFamily family, std::size_t begin, std::size_t end,
                        const ScheduleOptions& options, std::vector<ScheduleBlock>& blocks);
 

@@ -33,9 +33,7 @@ constexpr std::uint32_t kPadding = std::numeric_limits<std::uint32_t>::max();
 /// Slots are 32-bit, with room to spare.
 constexpr std::size_t kMostConstraintsPerFamily = std::size_t(1) << 30;
 
-std::size_t round_up(std::size_t n, std::size_t multiple) {
-  return (n + multiple - 1) / multiple * multiple;
-}
+using detail::round_up;
 
 ScheduleOptions checked(ScheduleOptions options) {
   if (options.block_size == 0)

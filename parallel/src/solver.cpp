@@ -812,6 +812,17 @@ void Solver::set_collisions(CollisionSettings settings,
   if (colours_contacts()) contact_masks_.assign(state_.size(), 0);
 }
 
+std::vector<std::uint32_t> Solver::contact_counts() const {
+  std::vector<std::uint32_t> counts(state_.size(), 0);
+  contacts_found_.for_each([&](ConstraintFamily, const auto& batch) {
+    // Contacts are fixed-arity families (shape matching, with its clusters, never is one).
+    if constexpr (kFixedArity<std::decay_t<decltype(batch)>>)
+      for (const auto& slot : batch.particles.particle)
+        for (std::size_t c = 0; c < batch.size(); ++c) ++counts[schedule_.user_particle(slot[c])];
+  });
+  return counts;
+}
+
 void Solver::clear_collisions() {
   collisions_.reset();
   contacts_ = JacobiSet();

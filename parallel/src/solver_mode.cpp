@@ -7,6 +7,24 @@
 
 namespace tessera {
 
+namespace {
+
+/// The value among `values` whose name_of is `name`; InvalidInput "unknown <what> '<name>'
+/// (known: a, b, ...)" otherwise.
+template <class Value, std::size_t N, class NameOf>
+Value parse_named(std::string_view name, const Value (&values)[N], NameOf name_of,
+                  const char* what) {
+  std::string known;
+  for (const Value value : values) {
+    if (name_of(value) == name) return value;
+    known += (known.empty() ? "" : ", ") + std::string(name_of(value));
+  }
+  throw InvalidInput("unknown " + std::string(what) + " '" + std::string(name) + "' (known: " +
+                     known + ")");
+}
+
+}  // namespace
+
 std::string_view solver_mode_name(SolverMode mode) {
   switch (mode) {
     case SolverMode::gs: return "gs";
@@ -18,12 +36,7 @@ std::string_view solver_mode_name(SolverMode mode) {
 }
 
 SolverMode parse_solver_mode(std::string_view name) {
-  std::string known;
-  for (const SolverMode mode : kSolverModes) {
-    if (solver_mode_name(mode) == name) return mode;
-    known += (known.empty() ? "" : ", ") + std::string(solver_mode_name(mode));
-  }
-  throw InvalidInput("unknown solver mode '" + std::string(name) + "' (known: " + known + ")");
+  return parse_named(name, kSolverModes, solver_mode_name, "solver mode");
 }
 
 std::string_view sequential_order_name(SequentialOrder order) {
@@ -35,10 +48,8 @@ std::string_view sequential_order_name(SequentialOrder order) {
 }
 
 SequentialOrder parse_sequential_order(std::string_view name) {
-  for (const SequentialOrder order : {SequentialOrder::groups, SequentialOrder::input})
-    if (sequential_order_name(order) == name) return order;
-  throw InvalidInput("unknown sequential order '" + std::string(name) +
-                     "' (known: groups, input)");
+  constexpr SequentialOrder kOrders[] = {SequentialOrder::groups, SequentialOrder::input};
+  return parse_named(name, kOrders, sequential_order_name, "sequential order");
 }
 
 std::string_view contact_scheduling_name(ContactScheduling scheduling) {
@@ -50,10 +61,9 @@ std::string_view contact_scheduling_name(ContactScheduling scheduling) {
 }
 
 ContactScheduling parse_contact_scheduling(std::string_view name) {
-  for (const ContactScheduling scheduling : {ContactScheduling::jacobi, ContactScheduling::coloured})
-    if (contact_scheduling_name(scheduling) == name) return scheduling;
-  throw InvalidInput("unknown contact scheduling '" + std::string(name) +
-                     "' (known: jacobi, coloured)");
+  constexpr ContactScheduling kSchedulings[] = {ContactScheduling::jacobi,
+                                                ContactScheduling::coloured};
+  return parse_named(name, kSchedulings, contact_scheduling_name, "contact scheduling");
 }
 
 }  // namespace tessera

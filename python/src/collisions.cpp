@@ -173,20 +173,8 @@ void bind_collisions(py::module_& m, py::class_<Solver>& solver) {
       .def(
           "contact_counts",
           [](const Solver& s) {
-            const std::size_t n = s.particle_count();
-            std::vector<std::uint32_t> scheduled(n, 0);
-            s.contacts().for_each([&](ConstraintFamily, const auto& batch) {
-              using Batch = std::decay_t<decltype(batch)>;
-              if constexpr (kFixedArity<Batch>) {
-                for (const auto& slot : batch.particles.particle)
-                  for (std::size_t j = 0; j < batch.size(); ++j) ++scheduled[slot[j]];
-              }
-            });
-            py::array_t<std::uint32_t> result{py::ssize_t(n)};
-            const auto to_user = s.schedule().particle_new_to_old();
-            for (std::size_t i = 0; i < n; ++i)
-              result.mutable_data()[to_user.empty() ? i : to_user[i]] = scheduled[i];
-            return result;
+            const std::vector<std::uint32_t> counts = s.contact_counts();
+            return copy_to_numpy<std::uint32_t>(counts, {py::ssize_t(counts.size())});
           },
           "(N,) the number of contacts of the last substep each particle is in, user numbering.");
 

@@ -271,6 +271,8 @@ class Solver {
   /// The contacts of the last substep as the collision stage found them, in the schedule's
   /// numbering.
   const ConstraintSets& contacts() const { return contacts_found_; }
+  /// Per particle (the user's numbering), the number of the last substep's contacts it is in.
+  std::vector<std::uint32_t> contact_counts() const;
 
   /// The particles in the schedule's numbering, for code that works on the arrays.
   const ParticleState& scheduled_state() const { return state_; }

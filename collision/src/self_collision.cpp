@@ -1,8 +1,9 @@
 // Self-collision detection per substep, in four steps (the picture and the contact rule are
 // in self_collision.hpp):
 //
-//   reach_boxes        each particle's motion; the boxes of vertices, triangles and edges
-//                      at the start, grown by their motion and by r (vertices), r/2 (edges)
+//   reach_boxes        each particle's motion, and its motion relative to the particles'
+//                      median motion; the boxes of vertices, triangles and edges at the
+//                      start, grown by that relative motion and by r (vertices), r/2 (edges)
 //   grids              the triangles and the edges in a uniform grid each
 //   vertex–triangle    each vertex queries the triangle grid; topology, statics, distance
 //   edge–edge          each edge queries the edge grid for higher edges; same filters
@@ -69,16 +70,16 @@ struct Particles {
     return Vector3r(p.previous_x[i], p.previous_y[i], p.previous_z[i]);
   }
   /// The box of particles `ids` at the start of the substep, grown by the most any of them
-  /// moves in it (so it holds the swept motion) and by `reach`.
+  /// moves relative to the common motion u (`growth`, see detect()) and by `reach`.
   template <std::size_t N>
-  Aabb reach_box(const std::uint32_t (&ids)[N], const Real* motion, Real reach) const {
+  Aabb reach_box(const std::uint32_t (&ids)[N], const Real* growth, Real reach) const {
     const std::uint32_t first = ids[0];
     Aabb box{{p.previous_x[first], p.previous_y[first], p.previous_z[first]},
              {p.previous_x[first], p.previous_y[first], p.previous_z[first]}};
     Real grow = 0;
     for (const std::uint32_t i : ids) {
       include(box, p.previous_x[i], p.previous_y[i], p.previous_z[i]);
-      grow = std::max(grow, motion[i]);
+      grow = std::max(grow, growth[i]);
     }
     inflate(box, grow + reach);
     return box;
@@ -102,6 +103,18 @@ bool separated_along_an_axis(const Vector3r (&a)[N], const Vector3r (&b)[M], Rea
     if (b_lo - a_hi > within || a_lo - b_hi > within) return true;
   }
   return false;
+}
+
+/// The most any point of the one primitive's hull moves relative to any point of the
+/// other's over the substep: max |Δa − Δb| over their corners (each point moves by a convex
+/// combination of its corners' motions, and so does their difference).
+template <std::size_t N, std::size_t M>
+Real relative_motion(const Vector3r* motion, const std::uint32_t (&a)[N],
+                     const std::uint32_t (&b)[M]) {
+  Real most = 0;
+  for (const std::uint32_t i : a)
+    for (const std::uint32_t j : b) most = std::max(most, (motion[i] - motion[j]).squaredNorm());
+  return std::sqrt(most);
 }
 
 template <class Body>
@@ -159,41 +172,57 @@ SelfCollision::Reach SelfCollision::compute_motion(const SelfCollisionPositions&
   const Real motion_scale = settings.motion_scale;
   parallel_over(particle_count_, [&](std::size_t i) {
     motion_[i] = motion_scale * (Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
-                                 particles.start(std::uint32_t(i)))
-                                    .norm();
+                                 particles.start(std::uint32_t(i)));
   });
   return {settings.thickness + settings.margin};
+}
+
+void SelfCollision::compute_growth() {
+  // u: the median of the motions on each axis. Any u bounds a pair's relative motion by
+  // |Δa − u| + |Δb − u|; the median keeps the resting majority's boxes tight while the rest
+  // falls, and a cloth that falls as a whole tight everywhere.
+  Vector3r u;
+  median_scratch_.resize(particle_count_);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::size_t i = 0; i < particle_count_; ++i) median_scratch_[i] = motion_[i][axis];
+    const auto middle = median_scratch_.begin() + std::ptrdiff_t(particle_count_ / 2);
+    std::nth_element(median_scratch_.begin(), middle, median_scratch_.end());
+    u[axis] = particle_count_ == 0 ? Real(0) : *middle;
+  }
+  growth_.resize(particle_count_);
+  parallel_over(particle_count_, [&](std::size_t i) { growth_[i] = (motion_[i] - u).norm(); });
 }
 
 void SelfCollision::detect(const SelfCollisionPositions& positions,
                            const SelfCollisionSettings& settings, Contacts& out) {
   check(positions, settings);
   const Real reach = compute_motion(positions, settings).distance;
+  compute_growth();
   const Particles particles{positions};
   const std::size_t triangle_count = triangles_.size() / 3;
   const std::size_t edge_count = edges_.size() / 2;
 
-  // Boxes: the start positions grown by the motion and the reach, the vertex's by all of
-  // the reach and an edge's by half. A pair that meets the contact rule (distance at the
-  // start below reach + the two motions) has overlapping boxes, since no coordinate differs
-  // by more than the distance; so the grid misses no contact, and the boxes hold the swept
-  // motion as well.
+  // Boxes: the start positions grown by the motion relative to u and by the reach, the
+  // vertex's by all of the reach and an edge's by half. A pair that meets the contact rule
+  // (distance at the start below reach + their relative motion, which is at most the sum of
+  // their motions relative to u) has overlapping boxes, since no coordinate differs by more
+  // than the distance; so the grid misses no contact.
   vertex_boxes_.resize(particle_count_);
   parallel_over(particle_count_, [&](std::size_t i) {
     const std::uint32_t ids[1] = {std::uint32_t(i)};
-    vertex_boxes_[i] = particles.reach_box(ids, motion_.data(), reach);
+    vertex_boxes_[i] = particles.reach_box(ids, growth_.data(), reach);
   });
   triangle_boxes_.resize(triangle_count);
   parallel_over(triangle_count, [&](std::size_t t) {
     const std::uint32_t ids[3] = {triangles_[3 * t], triangles_[3 * t + 1],
                                   triangles_[3 * t + 2]};
-    triangle_boxes_[t] = particles.reach_box(ids, motion_.data(), 0);
+    triangle_boxes_[t] = particles.reach_box(ids, growth_.data(), 0);
   });
   const std::size_t edge_queries = settings.edge_edge ? edge_count : 0;
   edge_boxes_.resize(edge_queries);
   parallel_over(edge_queries, [&](std::size_t e) {
     const std::uint32_t ids[2] = {edges_[2 * e], edges_[2 * e + 1]};
-    edge_boxes_[e] = particles.reach_box(ids, motion_.data(), reach / 2);
+    edge_boxes_[e] = particles.reach_box(ids, growth_.data(), reach / 2);
   });
   triangle_grid_.build(triangle_boxes_);
   edge_grid_.build(edge_boxes_);
@@ -209,8 +238,8 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
           const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1],
                               c = triangles_[3 * t + 2];
           if (p == a || p == b || p == c || particles.all_static({p, a, b, c})) return;
-          const Real within =
-              reach + motion_[p] + std::max({motion_[a], motion_[b], motion_[c]});
+          const std::uint32_t point[1] = {p}, corners[3] = {a, b, c};
+          const Real within = reach + relative_motion(motion_.data(), point, corners);
           if (detail::squared_point_triangle_distance(start, particles.start(a),
                                                       particles.start(b), particles.start(c)) <
               within * within)
@@ -229,13 +258,13 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
         const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
         const std::size_t first = buffer.size();
         const Vector3r s0 = particles.start(p0), s1 = particles.start(p1);
-        const Real own_motion = std::max(motion_[p0], motion_[p1]);
         edge_grid_.for_each_overlap_above(edge_boxes_[e], e, [&](std::uint32_t f) {
           const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
           if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3 ||
               particles.all_static({p0, p1, p2, p3}))
             return;
-          const Real within = reach + own_motion + std::max(motion_[p2], motion_[p3]);
+          const std::uint32_t own[2] = {p0, p1}, other[2] = {p2, p3};
+          const Real within = reach + relative_motion(motion_.data(), own, other);
           if (detail::squared_segment_distance(s0, s1, particles.start(p2),
                                                particles.start(p3)) < within * within)
             buffer.push_back({e, f});
@@ -282,7 +311,8 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
         const Pair pair = candidate_triangle_point_[k];
         const std::uint32_t p = pair.first, t = pair.second;
         const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
-        const Real within = reach.distance + motion_[p] + std::max({motion_[a], motion_[b], motion_[c]});
+        const std::uint32_t point_id[1] = {p}, corner_ids[3] = {a, b, c};
+        const Real within = reach.distance + relative_motion(motion_.data(), point_id, corner_ids);
         const Vector3r point[1] = {particles.start(p)};
         const Vector3r corners[3] = {particles.start(a), particles.start(b), particles.start(c)};
         if (separated_along_an_axis(point, corners, within)) return;
@@ -297,8 +327,8 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
         const Pair pair = candidate_edge_edge_[k];
         const std::uint32_t p0 = edges_[2 * pair.first], p1 = edges_[2 * pair.first + 1];
         const std::uint32_t p2 = edges_[2 * pair.second], p3 = edges_[2 * pair.second + 1];
-        const Real within = reach.distance + std::max(motion_[p0], motion_[p1]) +
-                            std::max(motion_[p2], motion_[p3]);
+        const std::uint32_t first_ids[2] = {p0, p1}, second_ids[2] = {p2, p3};
+        const Real within = reach.distance + relative_motion(motion_.data(), first_ids, second_ids);
         const Vector3r first[2] = {particles.start(p0), particles.start(p1)};
         const Vector3r second[2] = {particles.start(p2), particles.start(p3)};
         if (separated_along_an_axis(first, second, within)) return;

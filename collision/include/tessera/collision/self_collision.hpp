@@ -15,12 +15,19 @@
 // substep) to the predicted ones. The test is conservative and cheap: the distance at the
 // start minus the most any two of its points can approach each other,
 //
-//   d_start − (|Δp| + max(|Δa|, |Δb|, |Δc|)) < r      (|Δ| = |predicted − previous|)
+//   d_start − max |Δp − Δx| < r      over the corners x of the triangle (Δ = predicted − previous)
 //
 // (a point of a moving triangle moves by a convex combination of its corners' motions, so
-// the distance shrinks by at most that sum). Testing the predicted positions instead would
-// miss a vertex that crosses a triangle within the substep: it is found at neither end.
-// Contacts are therefore registered before the crossing, at the start-of-substep side.
+// the pair's difference moves by a convex combination of the Δp − Δx; edge–edge takes the
+// most over the four corner pairs). Only relative motion counts: a cloth falling as a whole
+// has its resting contacts only. Testing the predicted positions instead would miss a vertex
+// that crosses a triangle within the substep: it is found at neither end. Contacts are
+// therefore registered before the crossing, at the start-of-substep side.
+//
+// The broad phase grows each box by its particles' motion relative to u, the median motion
+// of all particles (per axis): |Δp − Δx| ≤ |Δp − u| + |Δx − u| for any u, so overlapping
+// boxes still hold every pair the rule accepts, and a box grows only as much as its
+// particles move against the bulk of the cloth.
 //
 // Limit (the kernel measures |p − q|, unsigned): a contact keeps a vertex on its side only
 // while the vertex has not passed the triangle when the kernel first sees it. Starting from a
@@ -162,6 +169,9 @@ class SelfCollision {
   /// Each particle's motion over the substep × settings.motion_scale, into motion_.
   Reach compute_motion(const SelfCollisionPositions& positions,
                        const SelfCollisionSettings& settings);
+  /// Each particle's motion relative to the median motion u, |Δ − u|, into growth_: what
+  /// the broad phase grows its boxes by.
+  void compute_growth();
   /// The pairs as the particle lists of `out`.
   void emit(Contacts& out) const;
 
@@ -169,7 +179,9 @@ class SelfCollision {
   std::vector<std::uint32_t> triangles_;
   std::vector<std::uint32_t> edges_;
   // Buffers reused across detections.
-  std::vector<Real> motion_;  // |predicted − previous| per particle
+  std::vector<Vector3r> motion_;  // (predicted − previous) × motion scale per particle
+  std::vector<Real> growth_;      // |motion − u|, u the median motion
+  std::vector<Real> median_scratch_;
   std::vector<Aabb> vertex_boxes_, triangle_boxes_, edge_boxes_;
   UniformGrid triangle_grid_, edge_grid_;
   std::vector<Pair> triangle_point_pairs_, edge_edge_pairs_;

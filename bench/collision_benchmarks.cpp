@@ -24,6 +24,13 @@
 //       particle–tet contacts, the batches; counters particle_tet, collider, edge_edge
 //   collision/reference/sweep/pile/threads:<T>   one gs sweep of the pile's FEM tetrahedra
 //       and that substep's contacts, the yardstick for the pile
+//   collision/stage_detect/drape/threads:<T>   CollisionStage::detect on the drape scene
+//       (`tessera run drape`, 128² cloth, self-collision, sphere and ground) at frame 60, the
+//       cloth in folds on the sphere, called once per iteration: with the default
+//       self_collision_interval of 4, three refinements per grid build, as in a run; the
+//       issue's budget is two of the sweeps below
+//   collision/reference/sweep/drape/threads:<T>   one gs sweep of the drape's cloth and that
+//       substep's contacts (a substep's projection: the scene runs 1 iteration)
 //
 // Threads: 1 and 2, each run inside a tbb::task_arena of that many threads.
 #include <benchmark/benchmark.h>
@@ -273,6 +280,90 @@ void BM_PileSweep(benchmark::State& state) {
                           std::int64_t(pile.scene.model.constraints.size() + solver.contacts().size()));
 }
 BENCHMARK(BM_PileSweep)->Name("collision/reference/sweep/pile")
+    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+/// The drape scene (`tessera run drape`: a 128² cloth with self-collision on a sphere and
+/// the ground, 32 substeps × 1 iteration) run to frame 60, the cloth lying on the sphere in
+/// folds; its solver kept for the sweep and its state for detection.
+struct SettledDrape {
+  io::Scene scene = io::build_scene(io::parse_scene_spec("drape"));
+  CollisionSettings collisions;
+  SolverSettings settings;
+  std::unique_ptr<Solver> solver;
+  ParticleState state;  // user numbering, previous = one substep back
+
+  SettledDrape() {
+    const io::CollisionDescription& described = scene.description.collisions;
+    for (const io::ColliderDescription& collider : described.colliders)
+      if (collider.shape == io::ColliderShape::sphere)
+        collisions.colliders.push_back(SphereCollider{collider.centre, collider.radius});
+      else
+        collisions.colliders.push_back(PlaneCollider{collider.normal, collider.offset});
+    collisions.thickness = described.thickness;
+    collisions.static_friction = described.static_friction;
+    collisions.dynamic_friction = described.dynamic_friction;
+    collisions.self_collision = true;
+    settings.threads = 2;
+    settings.substeps = scene.description.simulation.substeps;
+    settings.iterations = scene.description.simulation.iterations;
+    settings.report_residuals = false;
+    solver = std::make_unique<Solver>(test::make_solver(scene.model, settings, "stencil"));
+    solver->set_collisions(collisions, scene.surface_triangles);
+    for (int frame = 0; frame < 60; ++frame) solver->step();
+    const std::vector<Vector3r> x = solver->positions(), v = solver->velocities();
+    const auto masses = scene.model.particles.inverse_mass.begin();
+    state = ParticleState(x, std::vector<Real>(masses, masses + std::ptrdiff_t(x.size())));
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const Vector3r previous = x[i] - v[i] * substep();
+      state.previous_x[i] = previous.x(), state.previous_y[i] = previous.y(),
+      state.previous_z[i] = previous.z();
+      state.velocity_x[i] = v[i].x(), state.velocity_y[i] = v[i].y(), state.velocity_z[i] = v[i].z();
+    }
+  }
+  Real substep() const { return settings.time_step / Real(settings.substeps); }
+};
+
+SettledDrape& settled_drape() {
+  static SettledDrape drape;
+  return drape;
+}
+
+/// One substep's detection as a run makes it: a stage called once per iteration, so every
+/// 4th call (self_collision_interval) builds the grids and the others refine.
+void BM_DrapeDetect(benchmark::State& state) {
+  SettledDrape& drape = settled_drape();
+  in_arena(state, [&] {
+    CollisionStage stage(drape.collisions,
+                         std::vector<std::uint32_t>(drape.scene.surface_triangles.begin(),
+                                                    drape.scene.surface_triangles.end()),
+                         drape.state.size());
+    ConstraintSets contacts;
+    for (auto _ : state) stage.detect(drape.state, drape.substep(), Real(9.81), contacts);
+    state.counters["collider"] = double(contacts.collider_contact.size());
+    state.counters["triangle_point"] = double(contacts.triangle_point_distance.size());
+    state.counters["edge_edge"] = double(contacts.edge_edge_distance.size());
+  });
+}
+BENCHMARK(BM_DrapeDetect)->Name("collision/stage_detect/drape")
+    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+void BM_DrapeSweep(benchmark::State& state) {
+  SettledDrape& drape = settled_drape();
+  SolverSettings settings = drape.settings;
+  settings.threads = std::size_t(state.range(0));
+  settings.check_finite = false;
+  Solver solver = test::make_solver(drape.scene.model, settings, "stencil");
+  solver.set_collisions(drape.collisions, drape.scene.surface_triangles);
+  for (std::size_t i = 0; i < drape.state.size(); ++i) {
+    solver.set_position(ParticleIndex(i), drape.state.position(i));
+    solver.set_velocity(ParticleIndex(i), drape.state.velocity(i));
+  }
+  solver.step();  // a substep's contacts in place
+  for (auto _ : state) solver.project(1, drape.substep());
+  state.SetItemsProcessed(state.iterations() *
+                          std::int64_t(drape.scene.model.constraints.size() + solver.contacts().size()));
+}
+BENCHMARK(BM_DrapeSweep)->Name("collision/reference/sweep/drape")
     ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -16,74 +16,95 @@ namespace tessera {
 
 void UniformGrid::build(std::span<const Aabb> boxes, Real cell_size) {
   const std::size_t n = boxes.size();
+  const auto largest_extent = [](const Aabb& box) {
+    return std::max({double(box.hi[0]) - double(box.lo[0]), double(box.hi[1]) - double(box.lo[1]),
+                     double(box.hi[2]) - double(box.lo[2])});
+  };
+  double extent_sum = 0;
+  for (const Aabb& box : boxes) {
+    // A NaN would make the cell count undefined (and a position that diverged is the
+    // solver's failure to report, not a grid to build).
+    for (int axis = 0; axis < 3; ++axis)
+      if (!std::isfinite(box.lo[axis]) || !std::isfinite(box.hi[axis]))
+        throw InvalidInput("collision grid: a box has a coordinate that is not finite");
+    extent_sum += largest_extent(box);
+  }
+  const double large = kLargeBoxPerMean * extent_sum / double(std::max<std::size_t>(n, 1));
+  for (auto& members : members_) members.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    members_[largest_extent(boxes[i]) > large ? 1 : 0].push_back(std::uint32_t(i));
+  for (int l = 0; l < 2; ++l) build_level(levels_[l], boxes, members_[l], cell_size);
+}
+
+void UniformGrid::build_level(Level& level, std::span<const Aabb> boxes,
+                              std::span<const std::uint32_t> members, Real cell_size) {
+  const std::size_t n = members.size();
   double lowest[3] = {0, 0, 0}, highest[3] = {0, 0, 0};  // of the lower corners
-  for (double& extent : largest_extent_) extent = 0;
+  for (double& extent : level.largest_extent) extent = 0;
   if (n > 0)
-    for (int axis = 0; axis < 3; ++axis) lowest[axis] = highest[axis] = boxes[0].lo[axis];
-  bool finite = true;
-  for (const Aabb& box : boxes)
+    for (int axis = 0; axis < 3; ++axis) lowest[axis] = highest[axis] = boxes[members[0]].lo[axis];
+  for (const std::uint32_t i : members)
     for (int axis = 0; axis < 3; ++axis) {
-      finite &= std::isfinite(box.lo[axis]) && std::isfinite(box.hi[axis]);
+      const Aabb& box = boxes[i];
       lowest[axis] = std::min(lowest[axis], double(box.lo[axis]));
       highest[axis] = std::max(highest[axis], double(box.lo[axis]));
-      largest_extent_[axis] =
-          std::max(largest_extent_[axis], double(box.hi[axis]) - double(box.lo[axis]));
+      level.largest_extent[axis] =
+          std::max(level.largest_extent[axis], double(box.hi[axis]) - double(box.lo[axis]));
     }
-  // A NaN would make the cell count undefined (and a position that diverged is the
-  // solver's failure to report, not a grid to build).
-  if (!finite) throw InvalidInput("collision grid: a box has a coordinate that is not finite");
   // Points only (extent 0) get a cell from the span instead.
-  const double largest = std::max({largest_extent_[0], largest_extent_[1], largest_extent_[2]});
-  cell_size_ = cell_size > 0 ? double(cell_size) : largest * kCellPerExtent;
-  const auto cells_at = [&](double size) {
+  const double largest =
+      std::max({level.largest_extent[0], level.largest_extent[1], level.largest_extent[2]});
+  double size = cell_size > 0 ? double(cell_size) : largest * kCellPerExtent;
+  const auto cells_at = [&](double at) {
     double cells = 1;
-    for (int axis = 0; axis < 3; ++axis)
-      cells *= std::floor((highest[axis] - lowest[axis]) / size) + 1;
+    for (int axis = 0; axis < 3; ++axis) cells *= std::floor((highest[axis] - lowest[axis]) / at) + 1;
     return cells;
   };
   const double most_cells = double(kCellsPerBox * n + 64);
-  if (!(cell_size_ > 0)) {
+  if (!(size > 0)) {
     const double span = std::max({highest[0] - lowest[0], highest[1] - lowest[1],
                                   highest[2] - lowest[2]});
-    cell_size_ = span > 0 ? span / std::cbrt(most_cells) : 1;
+    size = span > 0 ? span / std::cbrt(most_cells) : 1;
   }
   // Spread-out boxes: grow the cell until the grid fits (each step at least 25%).
-  for (double cells = cells_at(cell_size_); cells > most_cells; cells = cells_at(cell_size_))
-    cell_size_ *= std::max(1.25, std::cbrt(cells / most_cells));
-  inverse_cell_size_ = 1 / cell_size_;
+  for (double cells = cells_at(size); cells > most_cells; cells = cells_at(size))
+    size *= std::max(1.25, std::cbrt(cells / most_cells));
+  level.cell_size = size;
+  level.inverse_cell_size = 1 / size;
   for (int axis = 0; axis < 3; ++axis) {
-    origin_[axis] = lowest[axis];
-    dims_[axis] = std::int64_t((highest[axis] - lowest[axis]) * inverse_cell_size_) + 1;
+    level.origin[axis] = lowest[axis];
+    level.dims[axis] = std::int64_t((highest[axis] - lowest[axis]) * level.inverse_cell_size) + 1;
   }
-  const std::size_t cells = std::size_t(dims_[0] * dims_[1] * dims_[2]);
+  const std::size_t cells = std::size_t(level.dims[0] * level.dims[1] * level.dims[2]);
 
   cell_of_box_.resize(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        const Aabb& box = boxes[i];
-                        cell_of_box_[i] = std::uint32_t(
-                            (cell_coordinate(box.lo[2], 2) * dims_[1] +
-                             cell_coordinate(box.lo[1], 1)) * dims_[0] +
-                            cell_coordinate(box.lo[0], 0));
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                        const Aabb& box = boxes[members[k]];
+                        cell_of_box_[k] = std::uint32_t(
+                            (level.cell_coordinate(box.lo[2], 2) * level.dims[1] +
+                             level.cell_coordinate(box.lo[1], 1)) * level.dims[0] +
+                            level.cell_coordinate(box.lo[0], 0));
                       }
                     });
 
   // Counting sort, sequential: its passes over n entries and ≤ 4n + 64 cells cost less than
   // a task fan-out at cloth sizes, and the stable scatter keeps each cell in box order.
-  cell_start_.assign(cells + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) ++cell_start_[cell_of_box_[i] + 1];
-  for (std::size_t c = 0; c < cells; ++c) cell_start_[c + 1] += cell_start_[c];
-  entry_index_.resize(n);
-  entry_box_.resize(n);
-  // cell_start_[c] serves as cell c's write cursor, then is shifted back.
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t e = cell_start_[cell_of_box_[i]]++;
-    entry_index_[e] = std::uint32_t(i);
-    entry_box_[e] = boxes[i];
+  std::vector<std::uint32_t>& start = level.cell_start;
+  start.assign(cells + 1, 0);
+  for (std::size_t k = 0; k < n; ++k) ++start[cell_of_box_[k] + 1];
+  for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+  level.entry_index.resize(n);
+  level.entry_box.resize(n);
+  // start[c] serves as cell c's write cursor, then is shifted back.
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t e = start[cell_of_box_[k]]++;
+    level.entry_index[e] = members[k];
+    level.entry_box[e] = boxes[members[k]];
   }
-  for (std::size_t c = cells; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
-  cell_start_[0] = 0;
+  for (std::size_t c = cells; c > 0; --c) start[c] = start[c - 1];
+  start[0] = 0;
 }
 
 namespace {
@@ -102,7 +123,9 @@ void UniformGrid::self_pairs(std::vector<CandidatePair>& out) const {
   const std::size_t n = size();
   // Box i's query is its own box: the entries are looked up by index, not by position.
   std::vector<Aabb> box_of(n);
-  for (std::size_t e = 0; e < n; ++e) box_of[entry_index_[e]] = entry_box_[e];
+  for (const Level& level : levels_)
+    for (std::size_t e = 0; e < level.entry_index.size(); ++e)
+      box_of[level.entry_index[e]] = level.entry_box[e];
   chunks.run(
       n,
       [&](std::size_t i, std::vector<CandidatePair>& buffer) {

@@ -75,25 +75,28 @@ struct CandidatePair {
 class UniformGrid {
  public:
   /// Rebuilds the grid over `boxes`, reusing its buffers. The cell is `cell_size`, or when 0
-  /// kCellPerExtent × the largest box extent, grown if the boxes' span would need more than
-  /// kCellsPerBox cells per box. Any cell size is correct (the query reaches back by the
-  /// largest extent, not by a cell); it only changes the speed. Throws InvalidInput
-  /// for a box that is not finite (a NaN would leave the cell count undefined).
+  /// kCellPerExtent × the largest box extent of the box's level, grown if the boxes' span
+  /// would need more than kCellsPerBox cells per box. Any cell size is correct (the query
+  /// reaches back by the largest extent, not by a cell); it only changes the speed. Throws
+  /// InvalidInput for a box that is not finite (a NaN would leave the cell count undefined).
   void build(std::span<const Aabb> boxes, Real cell_size = 0);
 
-  std::size_t size() const { return entry_index_.size(); }
-  Real cell_size() const { return Real(cell_size_); }
+  std::size_t size() const { return levels_[0].entry_index.size() + levels_[1].entry_index.size(); }
+  /// The cell of the ordinary boxes' level.
+  Real cell_size() const { return Real(levels_[0].cell_size); }
+  /// How many boxes went to the level of large boxes.
+  std::size_t large_box_count() const { return levels_[1].entry_index.size(); }
 
   /// Calls visit(i) once for every built box i overlapping `query`, in no fixed order.
   template <class Visit>
   void for_each_overlap(const Aabb& query, Visit&& visit) const {
-    scan(query, 0, visit);
+    for (const Level& level : levels_) level.scan(query, 0, visit);
   }
   /// The same for the boxes i > `index` only: a self query that keeps each pair once skips
   /// the lower half before testing boxes.
   template <class Visit>
   void for_each_overlap_above(const Aabb& query, std::uint32_t index, Visit&& visit) const {
-    scan(query, index + 1, visit);
+    for (const Level& level : levels_) level.scan(query, index + 1, visit);
   }
 
   /// Every pair (i, j), i < j, of overlapping built boxes, sorted. Parallel (TBB), the same
@@ -111,50 +114,61 @@ class UniformGrid {
   /// edges: cell/extent 1 → 0.5 → 0.33 → 0.25 took 40, 37, 28, 21 ms of edge scans under
   /// load, and the vertex–triangle scans 6.2, 3.2, 2.5, 3.6 ms).
   static constexpr double kCellPerExtent = 1.0 / 3.0;
+  /// A box whose largest extent passes this many times the boxes' mean goes to a second
+  /// level, the large boxes' own grid: else one fast particle's box would set how far back
+  /// every query reaches, and how coarse every cell is.
+  static constexpr double kLargeBoxPerMean = 2.0;
 
  private:
-  template <class Visit>
-  void scan(const Aabb& query, std::uint32_t lowest_index, Visit& visit) const;
-  /// Cell coordinate of v on `axis`, clamped to the grid (a monotone map, so a box below or
-  /// above the grid still meets every query that reaches that side). In double: a float
-  /// coordinate loses whole cells beyond 2^24 / cells.
-  std::int64_t cell_coordinate(double v, int axis) const {
-    const double c = std::floor((v - origin_[axis]) * inverse_cell_size_);
-    return c < 0 ? 0 : (c >= double(dims_[axis]) ? dims_[axis] - 1 : std::int64_t(c));
-  }
+  /// One grid over some of the boxes.
+  struct Level {
+    double cell_size = 1;
+    double inverse_cell_size = 1;
+    double largest_extent[3] = {0, 0, 0};  // per axis: a flat cloth's boxes are thin in one
+    double origin[3] = {0, 0, 0};
+    std::int64_t dims[3] = {1, 1, 1};
+    std::vector<std::uint32_t> cell_start;   // cells + 1 offsets into the entries
+    std::vector<std::uint32_t> entry_index;  // by cell (x fastest), then box index
+    std::vector<Aabb> entry_box;
 
-  double cell_size_ = 1;
-  double inverse_cell_size_ = 1;
-  double largest_extent_[3] = {0, 0, 0};  // per axis: a flat cloth's boxes are thin in one
-  double origin_[3] = {0, 0, 0};
-  std::int64_t dims_[3] = {1, 1, 1};
-  std::vector<std::uint32_t> cell_start_;  // cells + 1 offsets into the entries
-  std::vector<std::uint32_t> entry_index_;  // by cell (x fastest), then box index
-  std::vector<Aabb> entry_box_;
-  std::vector<std::uint32_t> cell_of_box_;  // build scratch
+    /// Cell coordinate of v on `axis`, clamped to the grid (a monotone map, so a box below
+    /// or above the grid still meets every query that reaches that side). In double: a
+    /// float coordinate loses whole cells beyond 2^24 / cells.
+    std::int64_t cell_coordinate(double v, int axis) const {
+      const double c = std::floor((v - origin[axis]) * inverse_cell_size);
+      return c < 0 ? 0 : (c >= double(dims[axis]) ? dims[axis] - 1 : std::int64_t(c));
+    }
+    template <class Visit>
+    void scan(const Aabb& query, std::uint32_t lowest_index, Visit& visit) const;
+  };
+  /// Builds `level` over the boxes `members` (ascending indices into `boxes`).
+  void build_level(Level& level, std::span<const Aabb> boxes,
+                   std::span<const std::uint32_t> members, Real cell_size);
+
+  Level levels_[2];  // the ordinary boxes, the large ones
+  std::vector<std::uint32_t> members_[2], cell_of_box_;  // build scratch
 };
 
 template <class Visit>
-void UniformGrid::scan(const Aabb& query, std::uint32_t lowest_index, Visit& visit) const {
-  if (entry_index_.empty()) return;
+void UniformGrid::Level::scan(const Aabb& query, std::uint32_t lowest_index, Visit& visit) const {
+  if (entry_index.empty()) return;
   // A box overlapping the query has its lower corner in [query.lo - extent, query.hi]; the
   // 1e-6 of a cell covers the rounding of that subtraction.
-  const double rounding = 1e-6 * cell_size_;
-  const std::int64_t x0 = cell_coordinate(query.lo[0] - largest_extent_[0] - rounding, 0),
+  const double rounding = 1e-6 * cell_size;
+  const std::int64_t x0 = cell_coordinate(query.lo[0] - largest_extent[0] - rounding, 0),
                      x1 = cell_coordinate(query.hi[0], 0);
-  const std::int64_t y0 = cell_coordinate(query.lo[1] - largest_extent_[1] - rounding, 1),
+  const std::int64_t y0 = cell_coordinate(query.lo[1] - largest_extent[1] - rounding, 1),
                      y1 = cell_coordinate(query.hi[1], 1);
-  const std::int64_t z0 = cell_coordinate(query.lo[2] - largest_extent_[2] - rounding, 2),
+  const std::int64_t z0 = cell_coordinate(query.lo[2] - largest_extent[2] - rounding, 2),
                      z1 = cell_coordinate(query.hi[2], 2);
   // The cells x0..x1 of one (y, z) row are consecutive, and so are their entries: one run.
   for (std::int64_t cz = z0; cz <= z1; ++cz)
     for (std::int64_t cy = y0; cy <= y1; ++cy) {
-      const std::size_t row = std::size_t((cz * dims_[1] + cy) * dims_[0]);
-      for (std::uint32_t e = cell_start_[row + std::size_t(x0)],
-                         end = cell_start_[row + std::size_t(x1) + 1];
+      const std::size_t row = std::size_t((cz * dims[1] + cy) * dims[0]);
+      for (std::uint32_t e = cell_start[row + std::size_t(x0)],
+                         end = cell_start[row + std::size_t(x1) + 1];
            e < end; ++e)
-        if (entry_index_[e] >= lowest_index && overlap(entry_box_[e], query))
-          visit(entry_index_[e]);
+        if (entry_index[e] >= lowest_index && overlap(entry_box[e], query)) visit(entry_index[e]);
     }
 }
 

@@ -46,6 +46,7 @@ struct CollisionStage::Buffers {
   /// The faces of the solids among the surface triangles (null without solids).
   std::unique_ptr<SolidSurface> solids;
   std::vector<ParticleIndex> distance_contacts;
+  std::size_t substeps_since_detection = 0;
 };
 
 CollisionStage::CollisionStage(CollisionSettings settings, std::vector<std::uint32_t> triangles,
@@ -121,16 +122,21 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
                                .margin = settings_.thickness / 2,
                                .stiffness = settings_.self_stiffness,
                                .edge_edge = !all_solid,
-                               .motion_scale = Real(interval)};
-    if (interval == 1) {
+                               .motion_scale = Real(kSelfCollisionMotionSubsteps),
+                               .skin = kSelfCollisionSkin * settings_.thickness};
+    // The grids at most every `interval` substeps, and sooner when a particle has moved
+    // beyond what the last detection's candidates cover (self_collision.hpp); in between,
+    // the candidates are tested at this substep's positions: the same contacts as a
+    // detection every substep.
+    const bool stale = buffers.substeps_since_detection + 1 >= interval ||
+                       !buffers.self->covers(state);
+    if (statistics_.substeps == 0 || stale) {
       buffers.self->detect(state, self, buffers.self_contacts);
+      buffers.substeps_since_detection = 0;
+      ++statistics_.self_detections;
     } else {
-      // The grids every `interval` substeps, reaching as far as that many substeps' motion;
-      // every substep the pairs they found are tested again at this substep's positions.
-      if (statistics_.substeps % interval == 0)
-        buffers.self->detect(state, self, buffers.self_contacts);
-      self.motion_scale = 1;
       buffers.self->refine(state, self, buffers.self_contacts);
+      ++buffers.substeps_since_detection;
     }
     if (buffers.solids) {
       // Vertex–face pairs of solids become particle–tet contacts; the rest stay distances.

@@ -1,12 +1,14 @@
 // Self-collision detection per substep, in four steps (the picture and the contact rule are
 // in self_collision.hpp):
 //
-//   reach_boxes        each particle's motion, and its motion relative to the particles'
-//                      median motion; the boxes of vertices, triangles and edges at the
-//                      start, grown by that relative motion and by r (vertices), r/2 (edges)
+//   reach_boxes        each particle's motion and budget (what it may move until the next
+//                      detection); the boxes of vertices, triangles and edges at the start,
+//                      grown by their budgets and by r (vertices), r/2 (edges)
 //   grids              the triangles and the edges in a uniform grid each
 //   vertex–triangle    each vertex queries the triangle grid; topology, statics, distance
 //   edge–edge          each edge queries the edge grid for higher edges; same filters
+//   filter             the candidates that meet the contact rule at this substep (also
+//                      what refine() does on later substeps)
 //
 // Both contact lists come out of chunked loops (chunked_output.hpp): sorted by key, whatever
 // the thread count.
@@ -18,6 +20,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <tessera/core/error.hpp>
 
@@ -70,16 +73,16 @@ struct Particles {
     return Vector3r(p.previous_x[i], p.previous_y[i], p.previous_z[i]);
   }
   /// The box of particles `ids` at the start of the substep, grown by the most any of them
-  /// moves relative to the common motion u (`growth`, see detect()) and by `reach`.
+  /// may move (its budget, see detect()) and by `reach`.
   template <std::size_t N>
-  Aabb reach_box(const std::uint32_t (&ids)[N], const Real* growth, Real reach) const {
+  Aabb reach_box(const std::uint32_t (&ids)[N], const Real* budget, Real reach) const {
     const std::uint32_t first = ids[0];
     Aabb box{{p.previous_x[first], p.previous_y[first], p.previous_z[first]},
              {p.previous_x[first], p.previous_y[first], p.previous_z[first]}};
     Real grow = 0;
     for (const std::uint32_t i : ids) {
       include(box, p.previous_x[i], p.previous_y[i], p.previous_z[i]);
-      grow = std::max(grow, growth[i]);
+      grow = std::max(grow, budget[i]);
     }
     inflate(box, grow + reach);
     return box;
@@ -163,66 +166,92 @@ void SelfCollision::check(const SelfCollisionPositions& positions,
     throw InvalidInput("self collision: margin must be finite and not negative");
   if (!(settings.motion_scale >= 1) || !std::isfinite(settings.motion_scale))
     throw InvalidInput("self collision: motion scale must be finite and at least 1");
+  if (!(settings.skin >= 0) || !std::isfinite(settings.skin))
+    throw InvalidInput("self collision: skin must be finite and not negative");
 }
 
 SelfCollision::Reach SelfCollision::compute_motion(const SelfCollisionPositions& positions,
                                                    const SelfCollisionSettings& settings) {
   const Particles particles{positions};
   motion_.resize(particle_count_);
-  const Real motion_scale = settings.motion_scale;
   parallel_over(particle_count_, [&](std::size_t i) {
-    motion_[i] = motion_scale * (Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
-                                 particles.start(std::uint32_t(i)));
+    motion_[i] = Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
+                 particles.start(std::uint32_t(i));
   });
   return {settings.thickness + settings.margin};
 }
 
-void SelfCollision::compute_growth() {
-  // u: the median of the motions on each axis. Any u bounds a pair's relative motion by
-  // |Δa − u| + |Δb − u|; the median keeps the resting majority's boxes tight while the rest
-  // falls, and a cloth that falls as a whole tight everywhere.
-  Vector3r u;
-  median_scratch_.resize(particle_count_);
+namespace {
+
+/// The median of `count` vectors, per axis (the same for any thread count): the motion of
+/// the bulk of the cloth, which a part that rests or falls as a whole shares exactly.
+template <class Of>
+Vector3r median_of(std::size_t count, Of&& of, std::vector<Real>& scratch) {
+  Vector3r median = Vector3r::Zero();
+  if (count == 0) return median;
+  scratch.resize(count);
   for (int axis = 0; axis < 3; ++axis) {
-    for (std::size_t i = 0; i < particle_count_; ++i) median_scratch_[i] = motion_[i][axis];
-    const auto middle = median_scratch_.begin() + std::ptrdiff_t(particle_count_ / 2);
-    std::nth_element(median_scratch_.begin(), middle, median_scratch_.end());
-    u[axis] = particle_count_ == 0 ? Real(0) : *middle;
+    for (std::size_t i = 0; i < count; ++i) scratch[i] = of(i)[axis];
+    const auto middle = scratch.begin() + std::ptrdiff_t(count / 2);
+    std::nth_element(scratch.begin(), middle, scratch.end());
+    median[axis] = *middle;
   }
-  growth_.resize(particle_count_);
-  parallel_over(particle_count_, [&](std::size_t i) { growth_[i] = (motion_[i] - u).norm(); });
+  return median;
+}
+
+}  // namespace
+
+void SelfCollision::compute_budgets(const SelfCollisionPositions& positions,
+                                    const SelfCollisionSettings& settings) {
+  // b = 2 (k |Δ − ū| + skin / 2), ū the bulk's (median) motion: half for the motion of a
+  // substep, half for the way since this detection (covers()).
+  const Particles particles{positions};
+  const Vector3r bulk_motion =
+      median_of(particle_count_, [&](std::size_t i) { return motion_[i]; }, scratch_);
+  budget_.resize(particle_count_);
+  anchor_.resize(particle_count_);
+  const Real scale = settings.motion_scale, skin = settings.skin;
+  parallel_over(particle_count_, [&](std::size_t i) {
+    budget_[i] = 2 * scale * (motion_[i] - bulk_motion).norm() + skin;
+    anchor_[i] = particles.start(std::uint32_t(i));
+  });
 }
 
 void SelfCollision::detect(const SelfCollisionPositions& positions,
                            const SelfCollisionSettings& settings, Contacts& out) {
   check(positions, settings);
   const Real reach = compute_motion(positions, settings).distance;
-  compute_growth();
+  compute_budgets(positions, settings);
   const Particles particles{positions};
   const std::size_t triangle_count = triangles_.size() / 3;
   const std::size_t edge_count = edges_.size() / 2;
+  const Real* budget = budget_.data();
+  const auto most = [&](std::initializer_list<std::uint32_t> ids) {
+    Real m = 0;
+    for (const std::uint32_t i : ids) m = std::max(m, budget[i]);
+    return m;
+  };
 
-  // Boxes: the start positions grown by the motion relative to u and by the reach, the
-  // vertex's by all of the reach and an edge's by half. A pair that meets the contact rule
-  // (distance at the start below reach + their relative motion, which is at most the sum of
-  // their motions relative to u) has overlapping boxes, since no coordinate differs by more
-  // than the distance; so the grid misses no contact.
+  // Candidates: the pairs closer at the start than the reach plus their particles' budgets.
+  // Boxes: the start positions grown by the budgets and the reach, the vertex's by all of
+  // the reach and an edge's by half. A pair within that distance has overlapping boxes, since
+  // no coordinate differs by more than the distance; so the grid misses no candidate.
   vertex_boxes_.resize(particle_count_);
   parallel_over(particle_count_, [&](std::size_t i) {
     const std::uint32_t ids[1] = {std::uint32_t(i)};
-    vertex_boxes_[i] = particles.reach_box(ids, growth_.data(), reach);
+    vertex_boxes_[i] = particles.reach_box(ids, budget, reach);
   });
   triangle_boxes_.resize(triangle_count);
   parallel_over(triangle_count, [&](std::size_t t) {
     const std::uint32_t ids[3] = {triangles_[3 * t], triangles_[3 * t + 1],
                                   triangles_[3 * t + 2]};
-    triangle_boxes_[t] = particles.reach_box(ids, growth_.data(), 0);
+    triangle_boxes_[t] = particles.reach_box(ids, budget, 0);
   });
   const std::size_t edge_queries = settings.edge_edge ? edge_count : 0;
   edge_boxes_.resize(edge_queries);
   parallel_over(edge_queries, [&](std::size_t e) {
     const std::uint32_t ids[2] = {edges_[2 * e], edges_[2 * e + 1]};
-    edge_boxes_[e] = particles.reach_box(ids, growth_.data(), reach / 2);
+    edge_boxes_[e] = particles.reach_box(ids, budget, reach / 2);
   });
   triangle_grid_.build(triangle_boxes_);
   edge_grid_.build(edge_boxes_);
@@ -238,8 +267,7 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
           const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1],
                               c = triangles_[3 * t + 2];
           if (p == a || p == b || p == c || particles.all_static({p, a, b, c})) return;
-          const std::uint32_t point[1] = {p}, corners[3] = {a, b, c};
-          const Real within = reach + relative_motion(motion_.data(), point, corners);
+          const Real within = reach + budget[p] + most({a, b, c});
           if (detail::squared_point_triangle_distance(start, particles.start(a),
                                                       particles.start(b), particles.start(c)) <
               within * within)
@@ -248,7 +276,7 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
                   [](const Pair& l, const Pair& r) { return l.second < r.second; });
       },
-      triangle_point_pairs_);
+      candidate_triangle_point_);
 
   // Edge–edge: each edge against the higher edges its box meets.
   chunks_->edge_edge.run(
@@ -258,13 +286,13 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
         const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
         const std::size_t first = buffer.size();
         const Vector3r s0 = particles.start(p0), s1 = particles.start(p1);
+        const Real own = reach + most({p0, p1});
         edge_grid_.for_each_overlap_above(edge_boxes_[e], e, [&](std::uint32_t f) {
           const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
           if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3 ||
               particles.all_static({p0, p1, p2, p3}))
             return;
-          const std::uint32_t own[2] = {p0, p1}, other[2] = {p2, p3};
-          const Real within = reach + relative_motion(motion_.data(), own, other);
+          const Real within = own + most({p2, p3});
           if (detail::squared_segment_distance(s0, s1, particles.start(p2),
                                                particles.start(p3)) < within * within)
             buffer.push_back({e, f});
@@ -272,11 +300,39 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
                   [](const Pair& l, const Pair& r) { return l.second < r.second; });
       },
-      edge_edge_pairs_);
+      candidate_edge_edge_);
+  if (!settings.edge_edge) candidate_edge_edge_.clear();
 
-  candidate_triangle_point_ = triangle_point_pairs_;
-  candidate_edge_edge_ = edge_edge_pairs_;
+  // This substep's contacts among them.
+  filter_candidates(positions, settings, reach);
   emit(out);
+}
+
+bool SelfCollision::covers(const SelfCollisionPositions& positions) {
+  if (positions.count != particle_count_ || anchor_.size() != particle_count_) return false;
+  // w = |x_start − anchor − W| (the way since the detection, W the bulk's) and
+  // m = |Δ − ū| (this substep's motion, ū the bulk's), each within half the budget.
+  const Particles particles{positions};
+  const auto way = [&](std::size_t i) {
+    return Vector3r(particles.start(std::uint32_t(i)) - anchor_[i]);
+  };
+  const auto motion = [&](std::size_t i) {
+    return Vector3r(Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
+                    particles.start(std::uint32_t(i)));
+  };
+  const Vector3r bulk_way = median_of(particle_count_, way, scratch_);
+  const Vector3r bulk_motion = median_of(particle_count_, motion, scratch_);
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, particle_count_, 4096), true,
+      [&](const tbb::blocked_range<std::size_t>& range, bool holds) {
+        for (std::size_t i = range.begin(); holds && i != range.end(); ++i) {
+          const Real half = budget_[i] / 2;
+          holds = (way(i) - bulk_way).squaredNorm() <= half * half &&
+                  (motion(i) - bulk_motion).squaredNorm() <= half * half;
+        }
+        return holds;
+      },
+      [](bool l, bool r) { return l && r; });
 }
 
 void SelfCollision::emit(Contacts& out) const {
@@ -302,6 +358,12 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
                            const SelfCollisionSettings& settings, Contacts& out) {
   check(positions, settings);
   const Reach reach = compute_motion(positions, settings);
+  filter_candidates(positions, settings, reach.distance);
+  emit(out);
+}
+
+void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
+                                      const SelfCollisionSettings& settings, Real reach) {
   const Particles particles{positions};
   // The candidates of the last detection, filtered by the contact rule at this substep's
   // start positions and motions; their order (sorted by key) is kept.
@@ -312,7 +374,7 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
         const std::uint32_t p = pair.first, t = pair.second;
         const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
         const std::uint32_t point_id[1] = {p}, corner_ids[3] = {a, b, c};
-        const Real within = reach.distance + relative_motion(motion_.data(), point_id, corner_ids);
+        const Real within = reach + relative_motion(motion_.data(), point_id, corner_ids);
         const Vector3r point[1] = {particles.start(p)};
         const Vector3r corners[3] = {particles.start(a), particles.start(b), particles.start(c)};
         if (separated_along_an_axis(point, corners, within)) return;
@@ -328,7 +390,7 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
         const std::uint32_t p0 = edges_[2 * pair.first], p1 = edges_[2 * pair.first + 1];
         const std::uint32_t p2 = edges_[2 * pair.second], p3 = edges_[2 * pair.second + 1];
         const std::uint32_t first_ids[2] = {p0, p1}, second_ids[2] = {p2, p3};
-        const Real within = reach.distance + relative_motion(motion_.data(), first_ids, second_ids);
+        const Real within = reach + relative_motion(motion_.data(), first_ids, second_ids);
         const Vector3r first[2] = {particles.start(p0), particles.start(p1)};
         const Vector3r second[2] = {particles.start(p2), particles.start(p3)};
         if (separated_along_an_axis(first, second, within)) return;
@@ -337,7 +399,6 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
           buffer.push_back(pair);
       },
       edge_edge_pairs_);
-  emit(out);
 }
 
 SelfCollisionConstraints make_self_collision_constraints(const SelfCollision::Contacts& contacts,

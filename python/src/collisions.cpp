@@ -162,6 +162,7 @@ void bind_collisions(py::module_& m, py::class_<Solver>& solver) {
             d["edge_edge_contacts"] = c.edge_edge_contacts;
             d["particle_tet_contacts"] = c.particle_tet_contacts;
             d["seconds_detection"] = c.seconds_detection;
+            d["self_collision_detections"] = c.self_detections;
             d["seconds_contact_scheduling"] = st.seconds_contact_scheduling;
             d["contact_colours_max"] = st.contact_colours_max;
             d["contacts_overflowed"] = st.contacts_overflowed;

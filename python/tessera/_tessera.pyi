@@ -307,7 +307,7 @@ class Solver:
         dynamic_friction: float = 0.3,
         restitution: float = 0.0,
         self_collision: bool = False,
-        self_collision_interval: int = 4,
+        self_collision_interval: int = 8,
     ) -> None:
         """Contacts every substep: colliders as dicts ('plane', 'sphere', 'box', 'capsule',
         'mesh'), self-collision of surface_triangles, particle-tet contacts of tetrahedra."""

@@ -261,25 +261,26 @@ TEST(SelfCollision, AFoldedClothHasExactlyTheBruteForceContacts) {
 
 TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContacts) {
   // The folded cloth's top layer moves down at a constant 0.2 h per substep; a detection
-  // reaching four substeps' motion, refined at each of the four, lists what a detection at
-  // that substep finds (and no more).
+  // whose budgets cover four substeps of that motion still covers each of the next four,
+  // and refined there lists what a detection at that substep finds (and no more).
   FoldedCloth cloth(24);
   ParticleState& s = cloth.state;
   SelfCollision once(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
   SelfCollisionSettings settings{Real(0.4) * cloth.spacing(), Real(0.1) * cloth.spacing()};
   settings.motion_scale = 4;
-  Contacts candidates, refined, direct;
-  once.detect(s, settings, candidates);
-  settings.motion_scale = 1;
+  Contacts first, refined, direct;
+  EXPECT_FALSE(once.covers(s)) << "no detection yet";
+  once.detect(s, settings, first);
   std::size_t changes = 0;
   std::vector<ParticleIndex> previous_list;
   for (int substep = 0; substep < 4; ++substep) {
+    EXPECT_TRUE(once.covers(s)) << substep;
     once.refine(s, settings, refined);
     every.detect(s, settings, direct);
     EXPECT_EQ(refined.triangle_point, direct.triangle_point) << substep;
     EXPECT_EQ(refined.triangle_point_triangle, direct.triangle_point_triangle) << substep;
     EXPECT_EQ(refined.edge_edge, direct.edge_edge) << substep;
-    EXPECT_LE(refined.triangle_point_count(), candidates.triangle_point_count());
+    EXPECT_LE(refined.triangle_point_count() + refined.edge_edge_count(), once.candidate_count());
     changes += refined.triangle_point != previous_list;
     previous_list = refined.triangle_point;
     for (std::size_t i = 0; i < s.size(); ++i) {  // one more substep of the same motion
@@ -289,7 +290,32 @@ TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContac
     }
   }
   EXPECT_GE(changes, 2u) << "the contacts change as the layers approach";
-  EXPECT_GT(candidates.triangle_point_count(), direct.triangle_point_count());
+  EXPECT_GT(once.candidate_count(), direct.triangle_point_count() + direct.edge_edge_count());
+}
+
+TEST(SelfCollision, ADetectionStopsCoveringWhenAParticleOutrunsItsBudget) {
+  // Budgets for one substep of motion and a skin of 0.1 h: the cloth drifting as a whole by
+  // 5 h stays covered, one particle moving 0.1 h against the rest does not, and neither does
+  // a substep in which it moves that much.
+  FoldedCloth cloth(16);
+  ParticleState& s = cloth.state;
+  const Real h = cloth.spacing();
+  for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i];  // at rest
+  SelfCollision collision(cloth.grid.triangle_indices, s.size());
+  SelfCollisionSettings settings{Real(0.4) * h, Real(0.1) * h};
+  settings.skin = Real(0.1) * h;
+  Contacts contacts;
+  collision.detect(s, settings, contacts);
+  EXPECT_TRUE(collision.covers(s));
+  ParticleState drifted = s;
+  for (std::size_t i = 0; i < s.size(); ++i) drifted.x[i] += 5 * h, drifted.previous_x[i] += 5 * h;
+  EXPECT_TRUE(collision.covers(drifted)) << "a drift of the whole cloth is no way";
+  ParticleState moved = s;
+  moved.previous_z[40] += Real(0.1) * h, moved.z[40] += Real(0.1) * h;
+  EXPECT_FALSE(collision.covers(moved)) << "particle 40 went twice its half budget";
+  ParticleState fast = s;
+  fast.z[40] += Real(0.1) * h;
+  EXPECT_FALSE(collision.covers(fast)) << "particle 40 moves 0.1 h in this substep";
 }
 
 TEST(SelfCollision, AFlatClothAtRestHasNoContact) {

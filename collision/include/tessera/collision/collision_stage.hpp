@@ -41,17 +41,23 @@ namespace tessera {
 inline constexpr Real kDefaultThickness = Real(0.005);
 inline constexpr Real kDefaultStaticFriction = Real(0.4);
 inline constexpr Real kDefaultDynamicFriction = Real(0.3);
-/// Substeps between self-collision grid builds (CollisionSettings::self_collision_interval).
-/// Between them every substep tests the pairs found against its own positions
-/// (SelfCollision::refine), so the contacts are those of a detection per substep as long as
-/// no particle moves faster than at the detection. Measured on the 64² drape (60 frames of
-/// 32 × 1, one thread each, two runs side by side on a loaded 2-core machine): every substep
-/// 40.0 s of detection, every 4th 20.8 s, the same state_hash (6fd05be3a6458a4a) and 502.5
-/// contacts per substep in both; every 2nd 24.9 s and every 8th 24.5 s (another pair, also
-/// the same state). Before the refinement (the 4-substep list kept as it was found) every 4th
-/// cut the 128² drape's detection 306 -> 82 s but multiplied the contacts by 7 and gained
-/// nothing.
-inline constexpr std::size_t kDefaultSelfCollisionInterval = 4;
+/// The most substeps between self-collision grid builds (CollisionSettings::
+/// self_collision_interval). A build lists candidate pairs with room for each particle to
+/// move (kSelfCollisionMotionSubsteps substeps of its motion against the cloth's median, plus
+/// kSelfCollisionSkin thicknesses); every substep until the next build tests them at its own
+/// positions (SelfCollision::refine), and a build comes sooner when some particle has moved
+/// beyond its room (SelfCollision::covers). So the contacts are exactly those of a detection
+/// every substep: the 128² drape (120 frames, 2 threads) ends with the same state_hash
+/// (8c23d64097bf398c) building every substep (3,840 builds, 107.5 s of detection), at most
+/// every 4th (1,440 builds, 49.7 s), 8th (1,406, 49.3 s) or 16th (1,389, 49.2 s): the
+/// drape's fast folds, not the cap, set how often. Room of 2 substeps and 0.1 thickness
+/// measured best there (no skin: 3,250 builds; a skin of 0.3 or 0.6: fewer builds, more
+/// candidates, 55-72 s). The fixed every-4th build it replaces (4 substeps of relative motion
+/// assumed, not checked) took 23.6 s but missed contacts (4,424.4 per substep against 4,429.2)
+/// and ended elsewhere.
+inline constexpr std::size_t kDefaultSelfCollisionInterval = 8;
+inline constexpr std::size_t kSelfCollisionMotionSubsteps = 2;
+inline constexpr Real kSelfCollisionSkin = Real(0.1);
 
 struct CollisionSettings {
   /// Static colliders.
@@ -73,10 +79,10 @@ struct CollisionSettings {
   bool self_collision = false;
   /// Stiffness of the self-contacts (PBD, compression only), in [0, 1].
   Real self_stiffness = 1;
-  /// The self-collision grids are built every this many substeps, reaching as far as the
-  /// particles move in that many (SelfCollisionSettings::motion_scale), and every substep
-  /// tests those pairs at its own positions (SelfCollision::refine); colliders are queried
-  /// every substep. ≥ 1. See kDefaultSelfCollisionInterval for the measurement.
+  /// The self-collision grids are built at least every this many substeps, and sooner when
+  /// a particle outruns what the last build covers; every other substep tests the last
+  /// build's candidates at its own positions (the same contacts either way); colliders are
+  /// queried every substep. ≥ 1. See kDefaultSelfCollisionInterval for the measurement.
   std::size_t self_collision_interval = kDefaultSelfCollisionInterval;
 };
 
@@ -95,6 +101,8 @@ struct CollisionStatistics {
   /// number of contacts of one substep, and the wall time of detection (broad + narrow phase
   /// and building the batches).
   std::uint64_t substeps = 0;
+  /// The substeps that built the self-collision grids (the others refined their candidates).
+  std::uint64_t self_detections = 0;
   std::uint64_t contacts_sum = 0;
   std::size_t contacts_max = 0;
   double seconds_detection = 0;

@@ -24,10 +24,21 @@
 // that crosses a triangle within the substep: it is found at neither end. Contacts are
 // therefore registered before the crossing, at the start-of-substep side.
 //
-// The broad phase grows each box by its particles' motion relative to u, the median motion
-// of all particles (per axis): |Δp − Δx| ≤ |Δp − u| + |Δx − u| for any u, so overlapping
-// boxes still hold every pair the rule accepts, and a box grows only as much as its
-// particles move against the bulk of the cloth.
+// Reusing a detection (the grids are the cost; the rule is cheap). A detection lists as
+// candidates every pair closer at the start than r + b(pair), where each particle gets a
+// budget b = 2 (k |Δ − ū| + skin / 2) (ū the median motion, k = motion_scale) and a pair's
+// budget adds its two primitives' largest. On a later substep, write for each particle
+//
+//   w = |start − anchor − W|   its way since the detection (anchor: its start then;
+//                              W the median way: the cloth may drift as a whole)
+//   m = |Δ − ū|                its motion over this substep against the median motion
+//
+// The rule's left side d_start − max |Δp − Δx| is at least the detection's distance minus
+// the largest w and m of each primitive, so while every particle keeps w ≤ b/2 and m ≤ b/2
+// (covers()), each pair that meets the rule was a candidate: filtering the candidates
+// (refine()) gives exactly the contacts of a detection of its own. The broad phase grows each
+// box by its particles' budgets, so the grids miss no candidate. A cloth falling as a whole
+// has only its resting pairs as candidates, and keeps them.
 //
 // Limit (the kernel measures |p − q|, unsigned): a contact keeps a vertex on its side only
 // while the vertex has not passed the triangle when the kernel first sees it. Starting from a
@@ -44,15 +55,12 @@
 // Determinism: contacts are listed sorted by (vertex, triangle) and (edge, edge) for any
 // thread count.
 //
-// Cost (bench/collision_benchmarks.cpp, 128² cloth folded onto itself, thickness 0.4 h,
-// margin 0.1 h, idle 2-core VM): 26 ms per detection on one thread, 13 ms on two; 6.5 and
-// 4.0 ms without edge–edge contacts; against 0.42 and 0.25 ms for one distance sweep of that
-// cloth — far above a budget of two sweeps. The work is in the candidates, not in the
-// lookups: each of the 48,641 edges' boxes (h long, grown by r/2 + motion) overlaps ~17
-// others, ~7 of them sharing no vertex (a segment distance each), and each of the 16,384
-// vertices meets ~9 triangle boxes. A cheaper detection has to test fewer pairs: edge–edge
-// off (the setting below), detection every k substeps with a margin for k substeps of
-// motion, or culling flat patches (normal cones) before the primitives.
+// Cost (bench/collision_benchmarks.cpp, the drape at frame 60 and the folded 128² cloth):
+// the work is in the candidates' boxes, not in the contacts. Each of the 48,641 edges' boxes
+// (h long, grown by r/2 + budget) overlaps ~15 others, ~10 of them sharing no vertex (a
+// segment distance each), and each of the 16,384 vertices meets ~17 triangle boxes; a
+// query scans ~95 entries of the grid for those. Hence reuse: the stage detects again only
+// when covers() fails or after CollisionSettings::self_collision_interval substeps.
 #pragma once
 
 #include <cstddef>
@@ -80,11 +88,14 @@ struct SelfCollisionSettings {
   /// (three edges per vertex, each a query of the edge grid); without them a crossing of
   /// two edges whose vertices stay out of reach of the other's triangles goes unseen.
   bool edge_edge = true;
-  /// The substeps the contacts are meant to last: each particle's motion over the substep
-  /// is taken this many times, so a list found once holds every pair that can come within
-  /// reach over that many substeps at the same speeds (the kernels measure the closest
-  /// points anew in every projection, so a contact stays valid while it lasts). ≥ 1.
+  /// The substeps a detection's candidates are meant to last at the particles' speeds
+  /// (see "Reusing a detection" above): each particle's budget is 2 k |Δ − ū| + skin, ū the
+  /// median motion. ≥ 1.
   Real motion_scale = 1;
+  /// Distance every particle may move (relative to the median) before covers() fails, on top
+  /// of its motion_scale substeps of motion. ≥ 0. Larger: more candidates to refine per
+  /// substep, fewer detections.
+  Real skin = 0;
 };
 
 /// The particle arrays detection reads (SoA): predicted positions x, y, z and the positions
@@ -141,16 +152,27 @@ class SelfCollision {
     detect(SelfCollisionPositions::of(state), settings, out);
   }
 
-  /// The contacts of this substep among the pairs the last detect() found: each pair
-  /// tested again by the contact rule at `positions` (start and predicted), in the same order.
-  /// With a detection made with motion_scale = k, this gives every substep of the next k
-  /// the list a detection of its own would give, as long as no particle moves faster than
-  /// at that detection: the grids are built once per k substeps, and the list stays as
-  /// tight as one found every substep. Same errors as detect().
+  /// The contacts of this substep among the candidates the last detect() found: each pair
+  /// tested again by the contact rule at `positions` (start and predicted), in the same
+  /// order. While covers(positions) holds, this is the list a detection of its own would
+  /// give. Same errors as detect().
   void refine(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings,
               Contacts& out);
   void refine(const ParticleState& state, const SelfCollisionSettings& settings, Contacts& out) {
     refine(SelfCollisionPositions::of(state), settings, out);
+  }
+
+  /// Whether the last detection's candidates still hold every contact at `positions`: each
+  /// particle's way since the detection (relative to the median way) and its motion over
+  /// this substep (relative to the median motion) are each within half its budget. False
+  /// before any detection or for another particle count.
+  bool covers(const SelfCollisionPositions& positions);
+  bool covers(const ParticleState& state) { return covers(SelfCollisionPositions::of(state)); }
+
+  /// The last detection's candidate pairs (vertex–triangle and edge–edge), which refine()
+  /// filters.
+  std::size_t candidate_count() const {
+    return candidate_triangle_point_.size() + candidate_edge_edge_.size();
   }
 
   std::size_t particle_count() const { return particle_count_; }
@@ -166,12 +188,16 @@ class SelfCollision {
     Real distance;  // thickness + margin
   };
   void check(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings) const;
-  /// Each particle's motion over the substep × settings.motion_scale, into motion_.
+  /// Each particle's motion over the substep, into motion_.
   Reach compute_motion(const SelfCollisionPositions& positions,
                        const SelfCollisionSettings& settings);
-  /// Each particle's motion relative to the median motion u, |Δ − u|, into growth_: what
-  /// the broad phase grows its boxes by.
-  void compute_growth();
+  /// Each particle's budget (2 k |Δ − ū| + skin) and its start position, the anchor of
+  /// covers().
+  void compute_budgets(const SelfCollisionPositions& positions,
+                       const SelfCollisionSettings& settings);
+  /// The candidates that meet the contact rule at `positions`, into the pair lists.
+  void filter_candidates(const SelfCollisionPositions& positions,
+                         const SelfCollisionSettings& settings, Real reach);
   /// The pairs as the particle lists of `out`.
   void emit(Contacts& out) const;
 
@@ -179,13 +205,14 @@ class SelfCollision {
   std::vector<std::uint32_t> triangles_;
   std::vector<std::uint32_t> edges_;
   // Buffers reused across detections.
-  std::vector<Vector3r> motion_;  // (predicted − previous) × motion scale per particle
-  std::vector<Real> growth_;      // |motion − u|, u the median motion
-  std::vector<Real> median_scratch_;
+  std::vector<Vector3r> motion_;  // predicted − previous per particle
+  std::vector<Real> budget_;      // of the last detection, per particle
+  std::vector<Vector3r> anchor_;  // start positions at the last detection
+  std::vector<Real> scratch_;     // the medians' copies
   std::vector<Aabb> vertex_boxes_, triangle_boxes_, edge_boxes_;
   UniformGrid triangle_grid_, edge_grid_;
   std::vector<Pair> triangle_point_pairs_, edge_edge_pairs_;
-  // The last detection's pairs, which refine() filters.
+  // The last detection's candidates, which refine() filters.
   std::vector<Pair> candidate_triangle_point_, candidate_edge_edge_;
   struct Chunks;  // the parallel loops' per-chunk buffers (chunked_output.hpp)
   std::unique_ptr<Chunks> chunks_;

@@ -90,9 +90,9 @@ struct CollisionDescription {
   Real dynamic_friction = Real(0.3);
   Real restitution = 0;
   bool self_collision = false;
-  /// Substeps between self-collision grid builds, each substep refining their pairs
-  /// (CollisionSettings::self_collision_interval; its default, kDefaultSelfCollisionInterval).
-  std::size_t self_collision_interval = 4;
+  /// The most substeps between self-collision grid builds, each other substep refining their
+  /// candidates (CollisionSettings::self_collision_interval; its default, kDefaultSelfCollisionInterval).
+  std::size_t self_collision_interval = 8;
 
   bool enabled() const { return self_collision || !colliders.empty(); }
 };

@@ -222,6 +222,8 @@ struct SettledPile {
     collisions.colliders = {PlaneCollider{Vector3r(0, 1, 0), 0}};
     collisions.self_collision = true;
     settings.threads = 2;
+    settings.substeps = scene.description.simulation.substeps;
+    settings.iterations = scene.description.simulation.iterations;
     settings.report_residuals = false;
     solver = std::make_unique<Solver>(test::make_solver(scene.model, settings, "stencil"));
     solver->set_collisions(collisions, scene.surface_triangles, scene.mesh.tetrahedra);

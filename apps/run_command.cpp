@@ -210,7 +210,8 @@ int run_command(const RunOptions& options) {
     summary.add("contacts_max", found.contacts_max);
     summary.add("seconds_collision", found.seconds_detection);
     if (stage->settings().self_collision)
-      summary.add("self_collision_detections", found.self_detections);
+      summary.add("self_collision_detections", found.self_detections),
+          summary.add("self_collision_reboxes", found.self_reboxes);
     // What ran: modes jacobi and sequential keep their own way whatever the setting says.
     const SolverMode mode = solver.settings().mode;
     const bool coloured = solver.settings().contact_scheduling == ContactScheduling::coloured &&

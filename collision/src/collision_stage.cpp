@@ -124,19 +124,26 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
                                .edge_edge = !all_solid,
                                .motion_scale = Real(kSelfCollisionMotionSubsteps),
                                .skin = kSelfCollisionSkin * settings_.thickness};
-    // The grids at most every `interval` substeps, and sooner when a particle has moved
-    // beyond what the last detection's candidates cover (self_collision.hpp); in between,
-    // the candidates are tested at this substep's positions: the same contacts as a
-    // detection every substep.
-    const bool stale = buffers.substeps_since_detection + 1 >= interval ||
-                       !buffers.self->covers(state);
-    if (statistics_.substeps == 0 || stale) {
+    // The grids at most every `interval` substeps; in between, the last build's candidates
+    // filtered at this substep's positions, the primitives of a particle that moved beyond
+    // its room re-boxed first (self_collision.hpp): the same contacts as a build every
+    // substep.
+    if (statistics_.substeps == 0 || buffers.substeps_since_detection + 1 >= interval) {
       buffers.self->detect(state, self, buffers.self_contacts);
       buffers.substeps_since_detection = 0;
       ++statistics_.self_detections;
     } else {
-      buffers.self->refine(state, self, buffers.self_contacts);
-      ++buffers.substeps_since_detection;
+      switch (buffers.self->update(state, self, buffers.self_contacts)) {
+        case SelfCollision::Update::built:
+          buffers.substeps_since_detection = 0;
+          ++statistics_.self_detections;
+          break;
+        case SelfCollision::Update::reboxed:
+          ++statistics_.self_reboxes;
+          ++buffers.substeps_since_detection;
+          break;
+        case SelfCollision::Update::refined: ++buffers.substeps_since_detection; break;
+      }
     }
     if (buffers.solids) {
       // Vertex–face pairs of solids become particle–tet contacts; the rest stay distances.

@@ -30,7 +30,8 @@
 namespace tessera {
 
 struct SelfCollision::Chunks {
-  detail::ChunkedOutput<Pair> triangle_point, edge_edge;
+  detail::ChunkedOutput<Pair> triangle_point, edge_edge, triangle_point_others;
+  detail::ChunkedOutput<std::uint32_t> vertices;
 };
 
 namespace {
@@ -66,27 +67,29 @@ void inflate(Aabb& box, Real by) {
   for (int axis = 0; axis < 3; ++axis) box.lo[axis] -= by, box.hi[axis] += by;
 }
 
+/// The box of the anchors of particles `ids`, grown by the largest of their budgets and by
+/// `reach`.
+template <std::size_t N>
+Aabb anchor_box(const std::uint32_t (&ids)[N], const Vector3r* anchor, const Real* budget,
+                Real reach) {
+  const Vector3r& a = anchor[ids[0]];
+  Aabb box{{a.x(), a.y(), a.z()}, {a.x(), a.y(), a.z()}};
+  Real grow = 0;
+  for (const std::uint32_t i : ids) {
+    include(box, anchor[i].x(), anchor[i].y(), anchor[i].z());
+    grow = std::max(grow, budget[i]);
+  }
+  inflate(box, grow + reach);
+  return box;
+}
+
 /// Reads the particles' arrays by index.
 struct Particles {
   const SelfCollisionPositions& p;
   Vector3r start(std::uint32_t i) const {
     return Vector3r(p.previous_x[i], p.previous_y[i], p.previous_z[i]);
   }
-  /// The box of particles `ids` at the start of the substep, grown by the most any of them
-  /// may move (its budget, see detect()) and by `reach`.
-  template <std::size_t N>
-  Aabb reach_box(const std::uint32_t (&ids)[N], const Real* budget, Real reach) const {
-    const std::uint32_t first = ids[0];
-    Aabb box{{p.previous_x[first], p.previous_y[first], p.previous_z[first]},
-             {p.previous_x[first], p.previous_y[first], p.previous_z[first]}};
-    Real grow = 0;
-    for (const std::uint32_t i : ids) {
-      include(box, p.previous_x[i], p.previous_y[i], p.previous_z[i]);
-      grow = std::max(grow, budget[i]);
-    }
-    inflate(box, grow + reach);
-    return box;
-  }
+  bool movable(std::uint32_t i) const { return p.inverse_mass[i] != 0; }
   bool all_static(std::initializer_list<std::uint32_t> ids) const {
     for (const std::uint32_t i : ids)
       if (p.inverse_mass[i] != 0) return false;
@@ -149,6 +152,19 @@ SelfCollision::SelfCollision(std::span<const std::uint32_t> triangles,
                          " names a particle twice");
   }
   edges_ = unique_edges(triangles);
+  // Each vertex's triangles and edges (CSR): what a particle that outran its room re-boxes.
+  const auto incidence = [&](std::span<const std::uint32_t> items, std::size_t per_item,
+                             std::vector<std::uint32_t>& start, std::vector<std::uint32_t>& list) {
+    start.assign(particle_count + 1, 0);
+    for (const std::uint32_t v : items) ++start[v + 1];
+    for (std::size_t v = 0; v < particle_count; ++v) start[v + 1] += start[v];
+    list.resize(items.size());
+    std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < items.size(); ++k)
+      list[cursor[items[k]]++] = std::uint32_t(k / per_item);
+  };
+  incidence(triangles_, 3, vertex_triangle_start_, vertex_triangles_);
+  incidence(edges_, 2, vertex_edge_start_, vertex_edges_);
 }
 
 SelfCollision::SelfCollision(SelfCollision&&) noexcept = default;
@@ -201,58 +217,103 @@ Vector3r median_of(std::size_t count, Of&& of, std::vector<Real>& scratch) {
 
 }  // namespace
 
-void SelfCollision::compute_budgets(const SelfCollisionPositions& positions,
-                                    const SelfCollisionSettings& settings) {
+Vector3r SelfCollision::bulk_motion() {
+  return median_of(particle_count_, [&](std::size_t i) { return motion_[i]; }, scratch_);
+}
+
+Real SelfCollision::budget_of(std::uint32_t i, const Vector3r& bulk,
+                              const SelfCollisionSettings& settings) const {
   // b = 2 (k |Δ − ū| + skin / 2), ū the bulk's (median) motion: half for the motion of a
-  // substep, half for the way since this detection (covers()).
+  // substep, half for the way since the particle was anchored (covers()).
+  return 2 * settings.motion_scale * (motion_[i] - bulk).norm() + settings.skin;
+}
+
+bool SelfCollision::triangle_point_candidate(std::uint32_t p, std::uint32_t t, Real reach,
+                                             const SelfCollisionPositions& positions) const {
   const Particles particles{positions};
-  const Vector3r bulk_motion =
-      median_of(particle_count_, [&](std::size_t i) { return motion_[i]; }, scratch_);
-  budget_.resize(particle_count_);
-  anchor_.resize(particle_count_);
-  const Real scale = settings.motion_scale, skin = settings.skin;
-  parallel_over(particle_count_, [&](std::size_t i) {
-    budget_[i] = 2 * scale * (motion_[i] - bulk_motion).norm() + skin;
-    anchor_[i] = particles.start(std::uint32_t(i));
-  });
+  const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
+  if (p == a || p == b || p == c) return false;
+  if (!particles.movable(p) && !particles.movable(a) && !particles.movable(b) &&
+      !particles.movable(c))
+    return false;
+  const Real within = reach + budget_[p] + std::max({budget_[a], budget_[b], budget_[c]});
+  return detail::squared_point_triangle_distance(anchor_[p], anchor_[a], anchor_[b], anchor_[c]) <
+         within * within;
+}
+
+bool SelfCollision::edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real reach,
+                                        const SelfCollisionPositions& positions) const {
+  const Particles particles{positions};
+  const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
+  const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
+  if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3) return false;
+  if (!particles.movable(p0) && !particles.movable(p1) && !particles.movable(p2) &&
+      !particles.movable(p3))
+    return false;
+  const Real within = reach + std::max(budget_[p0], budget_[p1]) + std::max(budget_[p2], budget_[p3]);
+  return detail::squared_segment_distance(anchor_[p0], anchor_[p1], anchor_[p2], anchor_[p3]) <
+         within * within;
+}
+
+Aabb SelfCollision::vertex_box(std::uint32_t p, Real reach) const {
+  const std::uint32_t ids[1] = {p};
+  return anchor_box(ids, anchor_.data(), budget_.data(), reach);
+}
+Aabb SelfCollision::triangle_box(std::uint32_t t) const {
+  const std::uint32_t ids[3] = {triangles_[3 * t], triangles_[3 * t + 1], triangles_[3 * t + 2]};
+  return anchor_box(ids, anchor_.data(), budget_.data(), 0);
+}
+Aabb SelfCollision::edge_box(std::uint32_t e, Real reach) const {
+  const std::uint32_t ids[2] = {edges_[2 * e], edges_[2 * e + 1]};
+  return anchor_box(ids, anchor_.data(), budget_.data(), reach / 2);
 }
 
 void SelfCollision::detect(const SelfCollisionPositions& positions,
                            const SelfCollisionSettings& settings, Contacts& out) {
   check(positions, settings);
   const Real reach = compute_motion(positions, settings).distance;
-  compute_budgets(positions, settings);
+  build(positions, settings, reach);
+  // This substep's contacts among the candidates.
+  filter_candidates(positions, settings, reach);
+  emit(out);
+}
+
+void SelfCollision::build(const SelfCollisionPositions& positions,
+                          const SelfCollisionSettings& settings, Real reach) {
   const Particles particles{positions};
   const std::size_t triangle_count = triangles_.size() / 3;
   const std::size_t edge_count = edges_.size() / 2;
-  const Real* budget = budget_.data();
-  const auto most = [&](std::initializer_list<std::uint32_t> ids) {
-    Real m = 0;
-    for (const std::uint32_t i : ids) m = std::max(m, budget[i]);
-    return m;
-  };
+  // Every particle anchored here: the frame's origin (covers()).
+  const Vector3r bulk = bulk_motion();
+  budget_.resize(particle_count_);
+  anchor_.resize(particle_count_);
+  frame_origin_.resize(particle_count_);
+  parallel_over(particle_count_, [&](std::size_t i) {
+    budget_[i] = budget_of(std::uint32_t(i), bulk, settings);
+    anchor_[i] = frame_origin_[i] = particles.start(std::uint32_t(i));
+  });
+  reboxed_vertex_.assign(particle_count_, 0);
+  reboxed_triangle_.assign(triangle_count, 0);
+  reboxed_edge_.assign(edge_count, 0);
+  reboxed_triangles_.clear();
+  reboxed_edges_.clear();
+  reboxed_triangle_grid_.build({});
+  reboxed_edge_grid_.build({});
 
-  // Candidates: the pairs closer at the start than the reach plus their particles' budgets.
-  // Boxes: the start positions grown by the budgets and the reach, the vertex's by all of
+  // Candidates: the pairs whose anchors are closer than the reach plus their particles'
+  // budgets. Boxes: the anchors grown by the budgets and the reach, the vertex's by all of
   // the reach and an edge's by half. A pair within that distance has overlapping boxes, since
   // no coordinate differs by more than the distance; so the grid misses no candidate.
   vertex_boxes_.resize(particle_count_);
-  parallel_over(particle_count_, [&](std::size_t i) {
-    const std::uint32_t ids[1] = {std::uint32_t(i)};
-    vertex_boxes_[i] = particles.reach_box(ids, budget, reach);
-  });
+  parallel_over(particle_count_,
+                [&](std::size_t i) { vertex_boxes_[i] = vertex_box(std::uint32_t(i), reach); });
   triangle_boxes_.resize(triangle_count);
-  parallel_over(triangle_count, [&](std::size_t t) {
-    const std::uint32_t ids[3] = {triangles_[3 * t], triangles_[3 * t + 1],
-                                  triangles_[3 * t + 2]};
-    triangle_boxes_[t] = particles.reach_box(ids, budget, 0);
-  });
+  parallel_over(triangle_count,
+                [&](std::size_t t) { triangle_boxes_[t] = triangle_box(std::uint32_t(t)); });
   const std::size_t edge_queries = settings.edge_edge ? edge_count : 0;
   edge_boxes_.resize(edge_queries);
-  parallel_over(edge_queries, [&](std::size_t e) {
-    const std::uint32_t ids[2] = {edges_[2 * e], edges_[2 * e + 1]};
-    edge_boxes_[e] = particles.reach_box(ids, budget, reach / 2);
-  });
+  parallel_over(edge_queries,
+                [&](std::size_t e) { edge_boxes_[e] = edge_box(std::uint32_t(e), reach); });
   triangle_grid_.build(triangle_boxes_);
   edge_grid_.build(edge_boxes_);
 
@@ -262,16 +323,8 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
       [&](std::size_t vertex, std::vector<Pair>& buffer) {
         const std::uint32_t p = std::uint32_t(vertex);
         const std::size_t first = buffer.size();
-        const Vector3r start = particles.start(p);
         triangle_grid_.for_each_overlap(vertex_boxes_[p], [&](std::uint32_t t) {
-          const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1],
-                              c = triangles_[3 * t + 2];
-          if (p == a || p == b || p == c || particles.all_static({p, a, b, c})) return;
-          const Real within = reach + budget[p] + most({a, b, c});
-          if (detail::squared_point_triangle_distance(start, particles.start(a),
-                                                      particles.start(b), particles.start(c)) <
-              within * within)
-            buffer.push_back({p, t});
+          if (triangle_point_candidate(p, t, reach, positions)) buffer.push_back({p, t});
         });
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
                   [](const Pair& l, const Pair& r) { return l.second < r.second; });
@@ -283,56 +336,237 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
       edge_queries,
       [&](std::size_t edge, std::vector<Pair>& buffer) {
         const std::uint32_t e = std::uint32_t(edge);
-        const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
         const std::size_t first = buffer.size();
-        const Vector3r s0 = particles.start(p0), s1 = particles.start(p1);
-        const Real own = reach + most({p0, p1});
         edge_grid_.for_each_overlap_above(edge_boxes_[e], e, [&](std::uint32_t f) {
-          const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
-          if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3 ||
-              particles.all_static({p0, p1, p2, p3}))
-            return;
-          const Real within = own + most({p2, p3});
-          if (detail::squared_segment_distance(s0, s1, particles.start(p2),
-                                               particles.start(p3)) < within * within)
-            buffer.push_back({e, f});
+          if (edge_edge_candidate(e, f, reach, positions)) buffer.push_back({e, f});
         });
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
                   [](const Pair& l, const Pair& r) { return l.second < r.second; });
       },
       candidate_edge_edge_);
-  if (!settings.edge_edge) candidate_edge_edge_.clear();
+}
 
-  // This substep's contacts among them.
-  filter_candidates(positions, settings, reach);
-  emit(out);
+SelfCollision::Frame SelfCollision::frame(const SelfCollisionPositions& positions) {
+  const Particles particles{positions};
+  Frame frame;
+  frame.way = median_of(
+      particle_count_,
+      [&](std::size_t i) { return Vector3r(particles.start(std::uint32_t(i)) - frame_origin_[i]); },
+      scratch_);
+  frame.motion = bulk_motion();
+  return frame;
+}
+
+bool SelfCollision::outran(std::uint32_t i, const Frame& frame,
+                           const SelfCollisionPositions& positions) const {
+  const Particles particles{positions};
+  // w = |x_start − W − anchor| (its way since it was anchored, in the frame that moves by
+  // the bulk's way W) and m = |Δ − ū| (this substep's motion against the bulk's), each
+  // within half its budget.
+  const Real half = budget_[i] / 2;
+  return (particles.start(i) - frame.way - anchor_[i]).squaredNorm() > half * half ||
+         (motion_[i] - frame.motion).squaredNorm() > half * half;
 }
 
 bool SelfCollision::covers(const SelfCollisionPositions& positions) {
   if (positions.count != particle_count_ || anchor_.size() != particle_count_) return false;
-  // w = |x_start − anchor − W| (the way since the detection, W the bulk's) and
-  // m = |Δ − ū| (this substep's motion, ū the bulk's), each within half the budget.
   const Particles particles{positions};
-  const auto way = [&](std::size_t i) {
-    return Vector3r(particles.start(std::uint32_t(i)) - anchor_[i]);
-  };
-  const auto motion = [&](std::size_t i) {
-    return Vector3r(Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
-                    particles.start(std::uint32_t(i)));
-  };
-  const Vector3r bulk_way = median_of(particle_count_, way, scratch_);
-  const Vector3r bulk_motion = median_of(particle_count_, motion, scratch_);
-  return tbb::parallel_reduce(
+  // Motion as refine() would compute it, without changing the object's state.
+  std::vector<Vector3r> saved;
+  saved.swap(motion_);
+  motion_.resize(particle_count_);
+  parallel_over(particle_count_, [&](std::size_t i) {
+    motion_[i] = Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
+                 particles.start(std::uint32_t(i));
+  });
+  const Frame now = frame(positions);
+  const bool holds = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, particle_count_, 4096), true,
-      [&](const tbb::blocked_range<std::size_t>& range, bool holds) {
-        for (std::size_t i = range.begin(); holds && i != range.end(); ++i) {
-          const Real half = budget_[i] / 2;
-          holds = (way(i) - bulk_way).squaredNorm() <= half * half &&
-                  (motion(i) - bulk_motion).squaredNorm() <= half * half;
-        }
-        return holds;
+      [&](const tbb::blocked_range<std::size_t>& range, bool all) {
+        for (std::size_t i = range.begin(); all && i != range.end(); ++i)
+          all = !outran(std::uint32_t(i), now, positions);
+        return all;
       },
       [](bool l, bool r) { return l && r; });
+  motion_.swap(saved);
+  return holds;
+}
+
+SelfCollision::Update SelfCollision::update(const SelfCollisionPositions& positions,
+                                            const SelfCollisionSettings& settings,
+                                            Contacts& out) {
+  check(positions, settings);
+  if (anchor_.size() != particle_count_) {
+    detect(positions, settings, out);
+    return Update::built;
+  }
+  const Real reach = compute_motion(positions, settings).distance;
+  const Frame now = frame(positions);
+  chunks_->vertices.run(
+      particle_count_,
+      [&](std::size_t i, std::vector<std::uint32_t>& buffer) {
+        if (outran(std::uint32_t(i), now, positions)) buffer.push_back(std::uint32_t(i));
+      },
+      outran_);
+  Update done = Update::refined;
+  if (!outran_.empty()) {
+    if (!rebox(positions, settings, reach, now)) {
+      build(positions, settings, reach);
+      done = Update::built;
+    } else {
+      done = Update::reboxed;
+    }
+  }
+  filter_candidates(positions, settings, reach);
+  emit(out);
+  return done;
+}
+
+bool SelfCollision::rebox(const SelfCollisionPositions& positions,
+                          const SelfCollisionSettings& settings, Real reach, const Frame& now) {
+  const Particles particles{positions};
+  const std::size_t triangle_count = triangles_.size() / 3;
+  // New: the primitives of the particles that outran their room (N); reboxed: those and
+  // the ones reboxed since the build (C), whose entries in the main grids are stale.
+  new_triangle_.assign(triangle_count, 0);
+  new_edge_.assign(edges_.size() / 2, 0);
+  std::size_t reboxed = reboxed_triangles_.size() + reboxed_edges_.size();
+  new_triangles_.clear();
+  new_edges_.clear();
+  for (const std::uint32_t i : outran_) {
+    for (std::uint32_t k = vertex_triangle_start_[i]; k < vertex_triangle_start_[i + 1]; ++k) {
+      const std::uint32_t t = vertex_triangles_[k];
+      if (!new_triangle_[t]) new_triangle_[t] = 1, new_triangles_.push_back(t);
+    }
+    for (std::uint32_t k = vertex_edge_start_[i]; k < vertex_edge_start_[i + 1]; ++k) {
+      const std::uint32_t e = vertex_edges_[k];
+      if (!new_edge_[e]) new_edge_[e] = 1, new_edges_.push_back(e);
+    }
+  }
+  for (const std::uint32_t t : new_triangles_) reboxed += !reboxed_triangle_[t];
+  for (const std::uint32_t e : new_edges_) reboxed += !reboxed_edge_[e];
+  // Past a share of the mesh, a full build costs less than queries one by one.
+  if (double(reboxed) > kReboxedShare * double(triangle_count + edges_.size() / 2)) return false;
+  std::sort(new_triangles_.begin(), new_triangles_.end());
+  std::sort(new_edges_.begin(), new_edges_.end());
+
+  // Re-anchor the particles that outran their room, in the frame.
+  const Vector3r bulk = now.motion;
+  for (const std::uint32_t i : outran_) {
+    budget_[i] = budget_of(i, bulk, settings);
+    anchor_[i] = particles.start(i) - now.way;
+    reboxed_vertex_[i] = 1;
+  }
+  for (const std::uint32_t t : new_triangles_)
+    if (!reboxed_triangle_[t]) reboxed_triangle_[t] = 1, reboxed_triangles_.push_back(t);
+  for (const std::uint32_t e : new_edges_)
+    if (!reboxed_edge_[e]) reboxed_edge_[e] = 1, reboxed_edges_.push_back(e);
+  // The reboxed primitives' boxes, in a second pair of grids (entry k: reboxed_*_[k]).
+  reboxed_triangle_boxes_.resize(reboxed_triangles_.size());
+  for (std::size_t k = 0; k < reboxed_triangles_.size(); ++k)
+    reboxed_triangle_boxes_[k] = triangle_box(reboxed_triangles_[k]);
+  reboxed_edge_boxes_.resize(reboxed_edges_.size());
+  for (std::size_t k = 0; k < reboxed_edges_.size(); ++k)
+    reboxed_edge_boxes_[k] = edge_box(reboxed_edges_[k], reach);
+  reboxed_triangle_grid_.build(reboxed_triangle_boxes_);
+  reboxed_edge_grid_.build(reboxed_edge_boxes_);
+
+  // Drop the candidates of the new primitives and find theirs again: the new vertices
+  // against every triangle, the other vertices against the new triangles, the new edges
+  // against every edge. The main grids' entries of reboxed primitives are stale and skipped;
+  // their boxes now are in the second grids.
+  new_vertex_.assign(particle_count_, 0);
+  for (const std::uint32_t i : outran_) new_vertex_[i] = 1;
+  std::erase_if(candidate_triangle_point_, [&](const Pair& pair) {
+    return new_vertex_[pair.first] || new_triangle_[pair.second];
+  });
+  std::erase_if(candidate_edge_edge_, [&](const Pair& pair) {
+    return new_edge_[pair.first] || new_edge_[pair.second];
+  });
+  const Real outward = reach;
+  chunks_->triangle_point.run(
+      outran_.size(),
+      [&](std::size_t k, std::vector<Pair>& buffer) {
+        const std::uint32_t p = outran_[k];
+        const std::size_t first = buffer.size();
+        const Aabb box = vertex_box(p, outward);
+        triangle_grid_.for_each_overlap(box, [&](std::uint32_t t) {
+          if (!reboxed_triangle_[t] && triangle_point_candidate(p, t, reach, positions))
+            buffer.push_back({p, t});
+        });
+        reboxed_triangle_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
+          const std::uint32_t t = reboxed_triangles_[entry];
+          if (triangle_point_candidate(p, t, reach, positions)) buffer.push_back({p, t});
+        });
+        std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
+                  [](const Pair& l, const Pair& r) { return l.second < r.second; });
+      },
+      found_triangle_point_);
+  if (!new_triangles_.empty()) {
+    Aabb reach_of_new = triangle_box(new_triangles_[0]);
+    for (const std::uint32_t t : new_triangles_) {
+      const Aabb box = triangle_box(t);
+      for (int axis = 0; axis < 3; ++axis)
+        reach_of_new.lo[axis] = std::min(reach_of_new.lo[axis], box.lo[axis]),
+        reach_of_new.hi[axis] = std::max(reach_of_new.hi[axis], box.hi[axis]);
+    }
+    chunks_->triangle_point_others.run(
+        particle_count_,
+        [&](std::size_t vertex, std::vector<Pair>& buffer) {
+          const std::uint32_t p = std::uint32_t(vertex);
+          if (new_vertex_[p]) return;
+          const Aabb box = vertex_box(p, outward);
+          if (!overlap(box, reach_of_new)) return;
+          const std::size_t first = buffer.size();
+          reboxed_triangle_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
+            const std::uint32_t t = reboxed_triangles_[entry];
+            if (new_triangle_[t] && triangle_point_candidate(p, t, reach, positions))
+              buffer.push_back({p, t});
+          });
+          std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
+                    [](const Pair& l, const Pair& r) { return l.second < r.second; });
+        },
+        found_others_);
+    merge_sorted(found_triangle_point_, found_others_);
+  }
+  merge_sorted(candidate_triangle_point_, found_triangle_point_);
+
+  if (settings.edge_edge) {
+    chunks_->edge_edge.run(
+        new_edges_.size(),
+        [&](std::size_t k, std::vector<Pair>& buffer) {
+          const std::uint32_t e = new_edges_[k];
+          const Aabb box = edge_box(e, reach);
+          const auto add = [&](std::uint32_t f) {
+            if (edge_edge_candidate(e, f, reach, positions))
+              buffer.push_back({std::min(e, f), std::max(e, f)});
+          };
+          edge_grid_.for_each_overlap(box, [&](std::uint32_t f) {
+            if (!reboxed_edge_[f]) add(f);
+          });
+          reboxed_edge_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
+            const std::uint32_t f = reboxed_edges_[entry];
+            // A pair of two new edges is found from both: kept from the lower.
+            if (f != e && !(new_edge_[f] && f < e)) add(f);
+          });
+        },
+        found_edge_edge_);
+    std::sort(found_edge_edge_.begin(), found_edge_edge_.end(), [](const Pair& l, const Pair& r) {
+      return l.first != r.first ? l.first < r.first : l.second < r.second;
+    });
+    merge_sorted(candidate_edge_edge_, found_edge_edge_);
+  }
+  return true;
+}
+
+void SelfCollision::merge_sorted(std::vector<Pair>& into, const std::vector<Pair>& more) {
+  if (more.empty()) return;
+  merged_.resize(into.size() + more.size());
+  std::merge(into.begin(), into.end(), more.begin(), more.end(), merged_.begin(),
+             [](const Pair& l, const Pair& r) {
+               return l.first != r.first ? l.first < r.first : l.second < r.second;
+             });
+  into.swap(merged_);
 }
 
 void SelfCollision::emit(Contacts& out) const {

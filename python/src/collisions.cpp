@@ -163,6 +163,7 @@ void bind_collisions(py::module_& m, py::class_<Solver>& solver) {
             d["particle_tet_contacts"] = c.particle_tet_contacts;
             d["seconds_detection"] = c.seconds_detection;
             d["self_collision_detections"] = c.self_detections;
+            d["self_collision_reboxes"] = c.self_reboxes;
             d["seconds_contact_scheduling"] = st.seconds_contact_scheduling;
             d["contact_colours_max"] = st.contact_colours_max;
             d["contacts_overflowed"] = st.contacts_overflowed;

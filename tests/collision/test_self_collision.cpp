@@ -318,6 +318,43 @@ TEST(SelfCollision, ADetectionStopsCoveringWhenAParticleOutrunsItsBudget) {
   EXPECT_FALSE(collision.covers(fast)) << "particle 40 moves 0.1 h in this substep";
 }
 
+TEST(SelfCollision, UpdatesRebuildOnlyWhatOutranItsRoomAndMatchADetectionEachSubstep) {
+  // The folded cloth at rest but for a patch of its upper layer that dives onto the lower
+  // one, speeding up each substep: those particles outrun the room a build gave them, so
+  // update() re-boxes their primitives (the rest keep their candidates), and every substep
+  // lists exactly what a detection of its own lists.
+  FoldedCloth cloth(24);
+  ParticleState& s = cloth.state;
+  const Real h = cloth.spacing();
+  for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i];
+  std::vector<std::size_t> patch;
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (s.y[i] > Real(0.5) * h && s.x[i] < Real(0.3) && s.z[i] > Real(0.4) && s.z[i] < Real(0.6))
+      patch.push_back(i);
+  ASSERT_GT(patch.size(), 5u);
+  SelfCollision updated(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
+  SelfCollisionSettings settings{Real(0.4) * h, Real(0.1) * h};
+  settings.motion_scale = 2;
+  settings.skin = Real(0.05) * h;
+  Contacts by_update, direct;
+  std::size_t reboxed = 0, built = 0;
+  for (int substep = 0; substep < 6; ++substep) {
+    const SelfCollision::Update done = updated.update(s, settings, by_update);
+    reboxed += done == SelfCollision::Update::reboxed;
+    built += done == SelfCollision::Update::built;
+    every.detect(s, settings, direct);
+    EXPECT_EQ(by_update.triangle_point, direct.triangle_point) << substep;
+    EXPECT_EQ(by_update.triangle_point_triangle, direct.triangle_point_triangle) << substep;
+    EXPECT_EQ(by_update.edge_edge, direct.edge_edge) << substep;
+    // Next substep: the patch comes down faster, the rest stays.
+    for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i];
+    for (const std::size_t i : patch) s.y[i] -= Real(0.03) * h * Real(substep + 1);
+  }
+  EXPECT_EQ(built, 1u) << "the first update builds; the patch is re-boxed after";
+  EXPECT_GE(reboxed, 2u);
+  EXPECT_GT(direct.triangle_point_count() + direct.edge_edge_count(), 0u);
+}
+
 TEST(SelfCollision, AFlatClothAtRestHasNoContact) {
   const io::ClothGrid grid = io::make_cloth_grid(32, 32, Real(1) / 31);
   const ParticleState state(grid.positions, std::vector<Real>(grid.vertex_count(), 1));

@@ -45,9 +45,9 @@ inline constexpr Real kDefaultDynamicFriction = Real(0.3);
 /// self_collision_interval). A build lists candidate pairs with room for each particle to
 /// move (kSelfCollisionMotionSubsteps substeps of its motion against the cloth's median, plus
 /// kSelfCollisionSkin thicknesses); every substep until the next build tests them at its own
-/// positions (SelfCollision::refine), and a build comes sooner when some particle has moved
-/// beyond its room (SelfCollision::covers). So the contacts are exactly those of a detection
-/// every substep: the 128² drape (120 frames, 2 threads) ends with the same state_hash
+/// positions, and a particle that has moved beyond its room gets its primitives re-boxed
+/// (SelfCollision::update; a full build when they pass a tenth of the mesh). So the contacts are exactly those of a detection
+/// every substep: the 128² drape (120 frames, 2 threads, full builds only) ends with the same state_hash
 /// (8c23d64097bf398c) building every substep (3,840 builds, 107.5 s of detection), at most
 /// every 4th (1,440 builds, 49.7 s), 8th (1,406, 49.3 s) or 16th (1,389, 49.2 s): the
 /// drape's fast folds, not the cap, set how often. Room of 2 substeps and 0.1 thickness
@@ -101,8 +101,10 @@ struct CollisionStatistics {
   /// number of contacts of one substep, and the wall time of detection (broad + narrow phase
   /// and building the batches).
   std::uint64_t substeps = 0;
-  /// The substeps that built the self-collision grids (the others refined their candidates).
+  /// The substeps that built the self-collision grids, and those that re-boxed the
+  /// primitives of particles that outran their room (the others refined the candidates).
   std::uint64_t self_detections = 0;
+  std::uint64_t self_reboxes = 0;
   std::uint64_t contacts_sum = 0;
   std::size_t contacts_max = 0;
   double seconds_detection = 0;

@@ -59,8 +59,11 @@
 // the work is in the candidates' boxes, not in the contacts. Each of the 48,641 edges' boxes
 // (h long, grown by r/2 + budget) overlaps ~15 others, ~10 of them sharing no vertex (a
 // segment distance each), and each of the 16,384 vertices meets ~17 triangle boxes; a
-// query scans ~95 entries of the grid for those. Hence reuse: the stage detects again only
-// when covers() fails or after CollisionSettings::self_collision_interval substeps.
+// query scans ~95 entries of the grid for those. Hence reuse: the stage calls update(),
+// which filters the candidates while every particle keeps to its room, re-boxes only the
+// primitives of the particles that left it (re-anchored in the frame of the bulk's way W),
+// and builds again past kReboxedShare of the mesh or after
+// CollisionSettings::self_collision_interval substeps.
 #pragma once
 
 #include <cstddef>
@@ -162,6 +165,23 @@ class SelfCollision {
     refine(SelfCollisionPositions::of(state), settings, out);
   }
 
+  /// What update() did.
+  enum class Update { refined, reboxed, built };
+  /// This substep's contacts (overwriting `out`) at the least cost that keeps them exact:
+  /// the candidates filtered (refine) when every particle is within its room; else the
+  /// primitives of the particles that outran it re-anchored, re-boxed and queried again
+  /// (the rest keep their candidates), or a full build when those passed kReboxedShare of
+  /// the mesh since the last build, or before any. The same contacts as detect() in every
+  /// case. Same errors as detect().
+  Update update(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings,
+                Contacts& out);
+  Update update(const ParticleState& state, const SelfCollisionSettings& settings, Contacts& out) {
+    return update(SelfCollisionPositions::of(state), settings, out);
+  }
+  /// Above this share of the mesh's triangles and edges re-boxed since the last build,
+  /// update() builds again.
+  static constexpr double kReboxedShare = 0.1;
+
   /// Whether the last detection's candidates still hold every contact at `positions`: each
   /// particle's way since the detection (relative to the median way) and its motion over
   /// this substep (relative to the median motion) are each within half its budget. False
@@ -187,17 +207,40 @@ class SelfCollision {
   struct Reach {
     Real distance;  // thickness + margin
   };
+  /// The bulk's motion and way since the last build (medians): the frame the anchors live in.
+  struct Frame {
+    Vector3r way;
+    Vector3r motion;
+  };
   void check(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings) const;
   /// Each particle's motion over the substep, into motion_.
   Reach compute_motion(const SelfCollisionPositions& positions,
                        const SelfCollisionSettings& settings);
-  /// Each particle's budget (2 k |Δ − ū| + skin) and its start position, the anchor of
-  /// covers().
-  void compute_budgets(const SelfCollisionPositions& positions,
-                       const SelfCollisionSettings& settings);
+  Vector3r bulk_motion();
+  Frame frame(const SelfCollisionPositions& positions);
+  /// Particle i's budget: 2 k |Δ − ū| + skin.
+  Real budget_of(std::uint32_t i, const Vector3r& bulk, const SelfCollisionSettings& settings) const;
+  /// Whether particle i has left its room (see "Reusing a detection").
+  bool outran(std::uint32_t i, const Frame& frame, const SelfCollisionPositions& positions) const;
+  /// The candidate rule on the anchors: closer than the reach plus the two budgets.
+  bool triangle_point_candidate(std::uint32_t p, std::uint32_t t, Real reach,
+                                const SelfCollisionPositions& positions) const;
+  bool edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real reach,
+                           const SelfCollisionPositions& positions) const;
+  Aabb vertex_box(std::uint32_t p, Real reach) const;
+  Aabb triangle_box(std::uint32_t t) const;
+  Aabb edge_box(std::uint32_t e, Real reach) const;
+  /// Every particle anchored at its start; the grids and the candidates.
+  void build(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings,
+             Real reach);
+  /// The particles of outran_ re-anchored, their primitives re-boxed and their candidates
+  /// found again; false (nothing done) when a build would cost less.
+  bool rebox(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings,
+             Real reach, const Frame& now);
   /// The candidates that meet the contact rule at `positions`, into the pair lists.
   void filter_candidates(const SelfCollisionPositions& positions,
                          const SelfCollisionSettings& settings, Real reach);
+  void merge_sorted(std::vector<Pair>& into, const std::vector<Pair>& more);
   /// The pairs as the particle lists of `out`.
   void emit(Contacts& out) const;
 
@@ -205,10 +248,23 @@ class SelfCollision {
   std::vector<std::uint32_t> triangles_;
   std::vector<std::uint32_t> edges_;
   // Buffers reused across detections.
-  std::vector<Vector3r> motion_;  // predicted − previous per particle
-  std::vector<Real> budget_;      // of the last detection, per particle
-  std::vector<Vector3r> anchor_;  // start positions at the last detection
-  std::vector<Real> scratch_;     // the medians' copies
+  std::vector<Vector3r> motion_;        // predicted − previous per particle
+  std::vector<Real> budget_;            // per particle, set when it was anchored
+  std::vector<Vector3r> anchor_;        // per particle, in the frame (start − bulk way then)
+  std::vector<Vector3r> frame_origin_;  // start positions at the last build
+  std::vector<Real> scratch_;           // the medians' copies
+  // Incidence: each vertex's triangles and edges (CSR).
+  std::vector<std::uint32_t> vertex_triangle_start_, vertex_triangles_;
+  std::vector<std::uint32_t> vertex_edge_start_, vertex_edges_;
+  // Re-boxing since the last build: flags and lists, their boxes and grids; this update's
+  // new ones; the particles that outran their room.
+  std::vector<std::uint8_t> reboxed_vertex_, reboxed_triangle_, reboxed_edge_;
+  std::vector<std::uint32_t> reboxed_triangles_, reboxed_edges_;
+  std::vector<Aabb> reboxed_triangle_boxes_, reboxed_edge_boxes_;
+  UniformGrid reboxed_triangle_grid_, reboxed_edge_grid_;
+  std::vector<std::uint8_t> new_vertex_, new_triangle_, new_edge_;
+  std::vector<std::uint32_t> new_triangles_, new_edges_, outran_;
+  std::vector<Pair> found_triangle_point_, found_others_, found_edge_edge_, merged_;
   std::vector<Aabb> vertex_boxes_, triangle_boxes_, edge_boxes_;
   UniformGrid triangle_grid_, edge_grid_;
   std::vector<Pair> triangle_point_pairs_, edge_edge_pairs_;

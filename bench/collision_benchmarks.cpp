@@ -26,8 +26,8 @@
 //       and that substep's contacts, the yardstick for the pile
 //   collision/stage_detect/drape/threads:<T>   CollisionStage::detect on the drape scene
 //       (`tessera run drape`, 128² cloth, self-collision, sphere and ground) at frame 60, the
-//       cloth in folds on the sphere, called once per iteration: with the default
-//       self_collision_interval of 4, three refinements per grid build, as in a run; the
+//       cloth in folds on the sphere, called once per iteration: a grid build every
+//       self_collision_interval-th call (8), the others filtering its candidates; the
 //       issue's budget is two of the sweeps below
 //   collision/reference/sweep/drape/threads:<T>   one gs sweep of the drape's cloth and that
 //       substep's contacts (a substep's projection: the scene runs 1 iteration)
@@ -209,92 +209,15 @@ void BM_DistanceSweep(benchmark::State& state) {
 BENCHMARK(BM_DistanceSweep)->Name("collision/reference/distance_sweep/cloth128")
     ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
-/// The pile scene run to frame 40 (blocks resting on each other), its solver kept for the
-/// sweep and its state for detection.
-struct SettledPile {
-  io::Scene scene = io::build_scene(io::parse_scene_spec("pile"));
+/// A scene of the tool run some frames with its own colliders (planes and spheres), friction,
+/// thickness, self-collision and substeps; its state kept for detection and for the sweep.
+struct SettledScene {
+  io::Scene scene;
   CollisionSettings collisions;
   SolverSettings settings;
-  std::unique_ptr<Solver> solver;
   ParticleState state;  // user numbering, previous = one substep back
 
-  SettledPile() {
-    collisions.colliders = {PlaneCollider{Vector3r(0, 1, 0), 0}};
-    collisions.self_collision = true;
-    settings.threads = 2;
-    settings.substeps = scene.description.simulation.substeps;
-    settings.iterations = scene.description.simulation.iterations;
-    settings.report_residuals = false;
-    solver = std::make_unique<Solver>(test::make_solver(scene.model, settings, "stencil"));
-    solver->set_collisions(collisions, scene.surface_triangles, scene.mesh.tetrahedra);
-    for (int frame = 0; frame < 40; ++frame) solver->step();
-    const std::vector<Vector3r> x = solver->positions(), v = solver->velocities();
-    const std::vector<Real> inverse_masses(
-        scene.model.particles.inverse_mass.begin(),
-        scene.model.particles.inverse_mass.begin() + std::ptrdiff_t(x.size()));
-    state = ParticleState(x, inverse_masses);
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      const Vector3r previous = x[i] - v[i] * substep();
-      state.previous_x[i] = previous.x(), state.previous_y[i] = previous.y(),
-      state.previous_z[i] = previous.z();
-      state.velocity_x[i] = v[i].x(), state.velocity_y[i] = v[i].y(), state.velocity_z[i] = v[i].z();
-    }
-  }
-  Real substep() const { return settings.time_step / Real(settings.substeps); }
-};
-
-SettledPile& settled_pile() {
-  static SettledPile pile;
-  return pile;
-}
-
-void BM_PileDetect(benchmark::State& state) {
-  SettledPile& pile = settled_pile();
-  in_arena(state, [&] {
-    CollisionStage stage(pile.collisions,
-                         std::vector<std::uint32_t>(pile.scene.surface_triangles.begin(),
-                                                    pile.scene.surface_triangles.end()),
-                         pile.state.size(), pile.scene.mesh.tetrahedra);
-    ConstraintSets contacts;
-    for (auto _ : state) stage.detect(pile.state, pile.substep(), Real(9.81), contacts);
-    state.counters["particle_tet"] = double(contacts.particle_tet_contact.size());
-    state.counters["collider"] = double(contacts.collider_contact.size());
-    state.counters["edge_edge"] = double(contacts.edge_edge_distance.size());
-  });
-}
-BENCHMARK(BM_PileDetect)->Name("collision/stage_detect/pile")
-    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
-
-void BM_PileSweep(benchmark::State& state) {
-  SettledPile& pile = settled_pile();
-  SolverSettings settings = pile.settings;
-  settings.threads = std::size_t(state.range(0));
-  settings.check_finite = false;
-  Solver solver = test::make_solver(pile.scene.model, settings, "stencil");
-  solver.set_collisions(pile.collisions, pile.scene.surface_triangles, pile.scene.mesh.tetrahedra);
-  for (std::size_t i = 0; i < pile.state.size(); ++i) {
-    solver.set_position(ParticleIndex(i), pile.state.position(i));
-    solver.set_velocity(ParticleIndex(i), pile.state.velocity(i));
-  }
-  solver.step();  // a substep's contacts in place
-  for (auto _ : state) solver.project(1, pile.substep());
-  state.SetItemsProcessed(state.iterations() *
-                          std::int64_t(pile.scene.model.constraints.size() + solver.contacts().size()));
-}
-BENCHMARK(BM_PileSweep)->Name("collision/reference/sweep/pile")
-    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
-
-/// The drape scene (`tessera run drape`: a 128² cloth with self-collision on a sphere and
-/// the ground, 32 substeps × 1 iteration) run to frame 60, the cloth lying on the sphere in
-/// folds; its solver kept for the sweep and its state for detection.
-struct SettledDrape {
-  io::Scene scene = io::build_scene(io::parse_scene_spec("drape"));
-  CollisionSettings collisions;
-  SolverSettings settings;
-  std::unique_ptr<Solver> solver;
-  ParticleState state;  // user numbering, previous = one substep back
-
-  SettledDrape() {
+  SettledScene(const char* spec, int frames) : scene(io::build_scene(io::parse_scene_spec(spec))) {
     const io::CollisionDescription& described = scene.description.collisions;
     for (const io::ColliderDescription& collider : described.colliders)
       if (collider.shape == io::ColliderShape::sphere)
@@ -304,15 +227,14 @@ struct SettledDrape {
     collisions.thickness = described.thickness;
     collisions.static_friction = described.static_friction;
     collisions.dynamic_friction = described.dynamic_friction;
-    collisions.self_collision = true;
+    collisions.self_collision = described.self_collision;
     settings.threads = 2;
     settings.substeps = scene.description.simulation.substeps;
     settings.iterations = scene.description.simulation.iterations;
     settings.report_residuals = false;
-    solver = std::make_unique<Solver>(test::make_solver(scene.model, settings, "stencil"));
-    solver->set_collisions(collisions, scene.surface_triangles);
-    for (int frame = 0; frame < 60; ++frame) solver->step();
-    const std::vector<Vector3r> x = solver->positions(), v = solver->velocities();
+    Solver solver = solver_at(settings);
+    for (int frame = 0; frame < frames; ++frame) solver.step();
+    const std::vector<Vector3r> x = solver.positions(), v = solver.velocities();
     const auto masses = scene.model.particles.inverse_mass.begin();
     state = ParticleState(x, std::vector<Real>(masses, masses + std::ptrdiff_t(x.size())));
     for (std::size_t i = 0; i < x.size(); ++i) {
@@ -323,48 +245,72 @@ struct SettledDrape {
     }
   }
   Real substep() const { return settings.time_step / Real(settings.substeps); }
+  /// A solver of the scene with its collisions, at the start or at the settled state.
+  Solver solver_at(const SolverSettings& with) const {
+    Solver solver = test::make_solver(scene.model, with, "stencil");
+    solver.set_collisions(collisions, scene.surface_triangles, scene.mesh.tetrahedra);
+    return solver;
+  }
 };
 
-SettledDrape& settled_drape() {
-  static SettledDrape drape;
+/// The pile run to frame 40 (blocks resting on each other), the drape to frame 60 (the cloth
+/// lying on the sphere in folds).
+const SettledScene& settled_pile() {
+  static const SettledScene pile("pile", 40);
+  return pile;
+}
+const SettledScene& settled_drape() {
+  static const SettledScene drape("drape", 60);
   return drape;
 }
 
-/// One substep's detection as a run makes it: a stage called once per iteration, so every
-/// 4th call (self_collision_interval) builds the grids and the others refine.
-void BM_DrapeDetect(benchmark::State& state) {
-  SettledDrape& drape = settled_drape();
+/// One substep's detection as a run makes it: a stage called once per iteration, so the
+/// self-collision grids are built every self_collision_interval-th call and the other calls
+/// filter their candidates.
+void run_stage_detect(benchmark::State& state, const SettledScene& settled) {
   in_arena(state, [&] {
-    CollisionStage stage(drape.collisions,
-                         std::vector<std::uint32_t>(drape.scene.surface_triangles.begin(),
-                                                    drape.scene.surface_triangles.end()),
-                         drape.state.size());
+    CollisionStage stage(settled.collisions,
+                         std::vector<std::uint32_t>(settled.scene.surface_triangles.begin(),
+                                                    settled.scene.surface_triangles.end()),
+                         settled.state.size(), settled.scene.mesh.tetrahedra);
     ConstraintSets contacts;
-    for (auto _ : state) stage.detect(drape.state, drape.substep(), Real(9.81), contacts);
+    for (auto _ : state) stage.detect(settled.state, settled.substep(), Real(9.81), contacts);
+    state.counters["particle_tet"] = double(contacts.particle_tet_contact.size());
     state.counters["collider"] = double(contacts.collider_contact.size());
     state.counters["triangle_point"] = double(contacts.triangle_point_distance.size());
     state.counters["edge_edge"] = double(contacts.edge_edge_distance.size());
   });
 }
+
+/// One gs sweep of the scene's constraints and that substep's contacts.
+void run_sweep(benchmark::State& state, const SettledScene& settled) {
+  SolverSettings settings = settled.settings;
+  settings.threads = std::size_t(state.range(0));
+  settings.check_finite = false;
+  Solver solver = settled.solver_at(settings);
+  for (std::size_t i = 0; i < settled.state.size(); ++i) {
+    solver.set_position(ParticleIndex(i), settled.state.position(i));
+    solver.set_velocity(ParticleIndex(i), settled.state.velocity(i));
+  }
+  solver.step();  // a substep's contacts in place
+  for (auto _ : state) solver.project(1, settled.substep());
+  state.SetItemsProcessed(state.iterations() * std::int64_t(settled.scene.model.constraints.size() +
+                                                            solver.contacts().size()));
+}
+
+void BM_PileDetect(benchmark::State& state) { run_stage_detect(state, settled_pile()); }
+BENCHMARK(BM_PileDetect)->Name("collision/stage_detect/pile")
+    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+void BM_PileSweep(benchmark::State& state) { run_sweep(state, settled_pile()); }
+BENCHMARK(BM_PileSweep)->Name("collision/reference/sweep/pile")
+    ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+
+void BM_DrapeDetect(benchmark::State& state) { run_stage_detect(state, settled_drape()); }
 BENCHMARK(BM_DrapeDetect)->Name("collision/stage_detect/drape")
     ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
-void BM_DrapeSweep(benchmark::State& state) {
-  SettledDrape& drape = settled_drape();
-  SolverSettings settings = drape.settings;
-  settings.threads = std::size_t(state.range(0));
-  settings.check_finite = false;
-  Solver solver = test::make_solver(drape.scene.model, settings, "stencil");
-  solver.set_collisions(drape.collisions, drape.scene.surface_triangles);
-  for (std::size_t i = 0; i < drape.state.size(); ++i) {
-    solver.set_position(ParticleIndex(i), drape.state.position(i));
-    solver.set_velocity(ParticleIndex(i), drape.state.velocity(i));
-  }
-  solver.step();  // a substep's contacts in place
-  for (auto _ : state) solver.project(1, drape.substep());
-  state.SetItemsProcessed(state.iterations() *
-                          std::int64_t(drape.scene.model.constraints.size() + solver.contacts().size()));
-}
+void BM_DrapeSweep(benchmark::State& state) { run_sweep(state, settled_drape()); }
 BENCHMARK(BM_DrapeSweep)->Name("collision/reference/sweep/drape")
     ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 

@@ -89,7 +89,6 @@ struct Particles {
   Vector3r start(std::uint32_t i) const {
     return Vector3r(p.previous_x[i], p.previous_y[i], p.previous_z[i]);
   }
-  bool movable(std::uint32_t i) const { return p.inverse_mass[i] != 0; }
   bool all_static(std::initializer_list<std::uint32_t> ids) const {
     for (const std::uint32_t i : ids)
       if (p.inverse_mass[i] != 0) return false;
@@ -186,14 +185,18 @@ void SelfCollision::check(const SelfCollisionPositions& positions,
     throw InvalidInput("self collision: skin must be finite and not negative");
 }
 
-SelfCollision::Reach SelfCollision::compute_motion(const SelfCollisionPositions& positions,
-                                                   const SelfCollisionSettings& settings) {
+void SelfCollision::measure_motion(const SelfCollisionPositions& positions) {
   const Particles particles{positions};
   motion_.resize(particle_count_);
   parallel_over(particle_count_, [&](std::size_t i) {
     motion_[i] = Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
                  particles.start(std::uint32_t(i));
   });
+}
+
+SelfCollision::Reach SelfCollision::compute_motion(const SelfCollisionPositions& positions,
+                                                   const SelfCollisionSettings& settings) {
+  measure_motion(positions);
   return {settings.thickness + settings.margin};
 }
 
@@ -233,9 +236,7 @@ bool SelfCollision::triangle_point_candidate(std::uint32_t p, std::uint32_t t, R
   const Particles particles{positions};
   const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
   if (p == a || p == b || p == c) return false;
-  if (!particles.movable(p) && !particles.movable(a) && !particles.movable(b) &&
-      !particles.movable(c))
-    return false;
+  if (particles.all_static({p, a, b, c})) return false;
   const Real within = reach + budget_[p] + std::max({budget_[a], budget_[b], budget_[c]});
   return detail::squared_point_triangle_distance(anchor_[p], anchor_[a], anchor_[b], anchor_[c]) <
          within * within;
@@ -247,9 +248,7 @@ bool SelfCollision::edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real r
   const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
   const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
   if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3) return false;
-  if (!particles.movable(p0) && !particles.movable(p1) && !particles.movable(p2) &&
-      !particles.movable(p3))
-    return false;
+  if (particles.all_static({p0, p1, p2, p3})) return false;
   const Real within = reach + std::max(budget_[p0], budget_[p1]) + std::max(budget_[p2], budget_[p3]);
   return detail::squared_segment_distance(anchor_[p0], anchor_[p1], anchor_[p2], anchor_[p3]) <
          within * within;
@@ -292,7 +291,6 @@ void SelfCollision::build(const SelfCollisionPositions& positions,
     budget_[i] = budget_of(std::uint32_t(i), bulk, settings);
     anchor_[i] = frame_origin_[i] = particles.start(std::uint32_t(i));
   });
-  reboxed_vertex_.assign(particle_count_, 0);
   reboxed_triangle_.assign(triangle_count, 0);
   reboxed_edge_.assign(edge_count, 0);
   reboxed_triangles_.clear();
@@ -370,17 +368,9 @@ bool SelfCollision::outran(std::uint32_t i, const Frame& frame,
 
 bool SelfCollision::covers(const SelfCollisionPositions& positions) {
   if (positions.count != particle_count_ || anchor_.size() != particle_count_) return false;
-  const Particles particles{positions};
-  // Motion as refine() would compute it, without changing the object's state.
-  std::vector<Vector3r> saved;
-  saved.swap(motion_);
-  motion_.resize(particle_count_);
-  parallel_over(particle_count_, [&](std::size_t i) {
-    motion_[i] = Vector3r(positions.x[i], positions.y[i], positions.z[i]) -
-                 particles.start(std::uint32_t(i));
-  });
+  measure_motion(positions);  // scratch: every entry point measures it anew
   const Frame now = frame(positions);
-  const bool holds = tbb::parallel_reduce(
+  return tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, particle_count_, 4096), true,
       [&](const tbb::blocked_range<std::size_t>& range, bool all) {
         for (std::size_t i = range.begin(); all && i != range.end(); ++i)
@@ -388,8 +378,6 @@ bool SelfCollision::covers(const SelfCollisionPositions& positions) {
         return all;
       },
       [](bool l, bool r) { return l && r; });
-  motion_.swap(saved);
-  return holds;
 }
 
 SelfCollision::Update SelfCollision::update(const SelfCollisionPositions& positions,
@@ -455,7 +443,6 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   for (const std::uint32_t i : outran_) {
     budget_[i] = budget_of(i, bulk, settings);
     anchor_[i] = particles.start(i) - now.way;
-    reboxed_vertex_[i] = 1;
   }
   for (const std::uint32_t t : new_triangles_)
     if (!reboxed_triangle_[t]) reboxed_triangle_[t] = 1, reboxed_triangles_.push_back(t);
@@ -483,13 +470,12 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   std::erase_if(candidate_edge_edge_, [&](const Pair& pair) {
     return new_edge_[pair.first] || new_edge_[pair.second];
   });
-  const Real outward = reach;
   chunks_->triangle_point.run(
       outran_.size(),
       [&](std::size_t k, std::vector<Pair>& buffer) {
         const std::uint32_t p = outran_[k];
         const std::size_t first = buffer.size();
-        const Aabb box = vertex_box(p, outward);
+        const Aabb box = vertex_box(p, reach);
         triangle_grid_.for_each_overlap(box, [&](std::uint32_t t) {
           if (!reboxed_triangle_[t] && triangle_point_candidate(p, t, reach, positions))
             buffer.push_back({p, t});
@@ -515,7 +501,7 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
         [&](std::size_t vertex, std::vector<Pair>& buffer) {
           const std::uint32_t p = std::uint32_t(vertex);
           if (new_vertex_[p]) return;
-          const Aabb box = vertex_box(p, outward);
+          const Aabb box = vertex_box(p, reach);
           if (!overlap(box, reach_of_new)) return;
           const std::size_t first = buffer.size();
           reboxed_triangle_grid_.for_each_overlap(box, [&](std::uint32_t entry) {

@@ -213,7 +213,9 @@ class SelfCollision {
     Vector3r motion;
   };
   void check(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings) const;
-  /// Each particle's motion over the substep, into motion_.
+  /// Each particle's motion over the substep, into motion_ (scratch of every call).
+  void measure_motion(const SelfCollisionPositions& positions);
+  /// The same, and the reach of the settings.
   Reach compute_motion(const SelfCollisionPositions& positions,
                        const SelfCollisionSettings& settings);
   Vector3r bulk_motion();
@@ -258,7 +260,7 @@ class SelfCollision {
   std::vector<std::uint32_t> vertex_edge_start_, vertex_edges_;
   // Re-boxing since the last build: flags and lists, their boxes and grids; this update's
   // new ones; the particles that outran their room.
-  std::vector<std::uint8_t> reboxed_vertex_, reboxed_triangle_, reboxed_edge_;
+  std::vector<std::uint8_t> reboxed_triangle_, reboxed_edge_;
   std::vector<std::uint32_t> reboxed_triangles_, reboxed_edges_;
   std::vector<Aabb> reboxed_triangle_boxes_, reboxed_edge_boxes_;
   UniformGrid reboxed_triangle_grid_, reboxed_edge_grid_;

@@ -159,6 +159,12 @@ TEST(SelfCollision, InvalidInputIsRefused) {
   const ParticleState state = triangle_and_point(Vector3r(0, 0, 1));
   EXPECT_THROW(collision.detect(state, SelfCollisionSettings{0, 0}, contacts), InvalidInput);
   EXPECT_THROW(collision.detect(state, SelfCollisionSettings{1, -1}, contacts), InvalidInput);
+  SelfCollisionSettings negative_skin = kSettings;
+  negative_skin.skin = -1;
+  EXPECT_THROW(collision.update(state, negative_skin, contacts), InvalidInput);
+  SelfCollisionSettings small_scale = kSettings;
+  small_scale.motion_scale = Real(0.5);
+  EXPECT_THROW(collision.detect(state, small_scale, contacts), InvalidInput);
   EXPECT_THROW(collision.detect(ParticleState(3), kSettings, contacts), InvalidInput);
 }
 

@@ -2,8 +2,6 @@
 // asked), and print what it measured as aligned "key  value" lines or one JSON object.
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <iostream>
 #include <memory>
 
@@ -65,7 +63,8 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
   add_scene_options(*command, options.scene);
   command->add_option("--frames", options.frames, "time steps to simulate (default 60)")
       ->check(integer_from(0, std::size_t(1) << 31));
-  command->add_option("--substeps", options.substeps, "substeps per frame (default 32)")
+  command->add_option("--substeps", options.substeps, "substeps per frame (default: the scene's; 32, the cloth scenes " +
+                          std::to_string(io::kClothSubsteps) + ")")
       ->check(integer_from(1, std::size_t(1) << 20));
   command->add_option("--iterations", options.iterations, "projection sweeps per substep (default 1)")
       ->check(integer_from(1, std::size_t(1) << 20));

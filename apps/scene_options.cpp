@@ -43,6 +43,10 @@ void add_scene_options(CLI::App& command, SceneOptions& options) {
   command.add_option("--tethers", options.tethers,
                      "auto (default: every movable particle tethered to its nearest pin along "
                      "the mesh) or none");
+  command.add_option("--tether-attachments", options.tether_attachments,
+                     "tethers auto: how many pins each particle is tethered to, the nearest along "
+                     "the mesh first (default 2)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20));
   command.add_option("--self-collision", options.self_collision,
                      "on or off: the surface's contacts with itself (default: the scene's)");
   command.add_option("--thickness", options.thickness,
@@ -87,6 +91,7 @@ io::SceneDescription describe_scene(const SceneOptions& options) {
   if (solid_material) description.solid.material = *solid_material;
   if (pins) description.pins = *pins;
   if (tethers) description.tethers = *tethers;
+  if (options.tether_attachments) description.tether_attachments = *options.tether_attachments;
   io::CollisionDescription& collisions = description.collisions;
   if (options.self_collision) collisions.self_collision = *options.self_collision == "on";
   if (options.thickness) collisions.thickness = Real(*options.thickness);

@@ -22,12 +22,14 @@ struct SceneOptions {
   std::optional<std::string> solid_material;
   std::optional<std::string> pins;
   std::optional<std::string> tethers;
+  std::optional<std::size_t> tether_attachments;
   std::optional<std::string> self_collision;
   std::optional<double> thickness;
   std::optional<double> friction;
 };
 
 /// Adds SCENE and --shell-material, --bending, --solid-material, --pins, --tethers,
+/// --tether-attachments,
 /// --self-collision, --thickness, --friction to `command`.
 void add_scene_options(CLI::App& command, SceneOptions& options);
 

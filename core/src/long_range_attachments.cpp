@@ -4,9 +4,10 @@
 #include <tessera/core/long_range_attachments.hpp>
 
 #include <cmath>
+#include <algorithm>
 #include <cstdint>
-#include <limits>
 #include <queue>
+#include <tuple>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,8 +16,6 @@
 
 namespace tessera {
 namespace {
-
-constexpr ParticleIndex kNone = std::numeric_limits<ParticleIndex>::max();
 
 /// The edge graph as CSR: neighbours[offsets[p], offsets[p + 1]) of particle p.
 struct EdgeGraph {
@@ -58,6 +57,8 @@ void check_input(std::span<const Vector3r> rest_positions, std::span<const Real>
                          " is not finite");
   if (!(std::isfinite(o.reach_scale) && o.reach_scale > 0))
     throw InvalidInput(context + "reach scale must be positive and finite");
+  if (o.attachments < 1)
+    throw InvalidInput(context + "attachments per particle must be at least 1");
 }
 
 }  // namespace
@@ -70,43 +71,54 @@ TetherConstraints make_long_range_attachments(std::span<const Vector3r> rest_pos
   const std::size_t n = rest_positions.size();
   const EdgeGraph graph = edge_graph(edges, n);
 
-  // Dijkstra from every attachment at once; a particle keeps the nearest attachment, and of
-  // equally near ones the smaller number (the order of the queue entries makes it so).
-  std::vector<double> distance(n, std::numeric_limits<double>::infinity());
-  std::vector<ParticleIndex> attachment(n, kNone);
-  using Entry = std::pair<double, ParticleIndex>;
+  // Dijkstra from every attachment at once, each particle settled once per attachment up to
+  // `attachments` times: queue entries (length, attachment, particle) leave in that order, so
+  // a particle keeps its nearest attachments, of equally near ones the smaller numbers, and
+  // the search grows from each attachment as its own would until the particles it reaches
+  // have enough nearer ones. Every settled (particle, attachment) relaxes the particle's edges
+  // once: at most attachments × 2 × edges queue entries.
+  std::size_t attachment_count = 0;
+  for (std::size_t p = 0; p < n; ++p) attachment_count += !(inverse_masses[p] > 0);
+  const std::size_t wanted = std::min(options.attachments, attachment_count);
+  struct Settled {
+    ParticleIndex attachment;
+    double distance;
+  };
+  std::vector<Settled> settled(n * wanted);
+  std::vector<std::uint32_t> settled_count(n, 0);
+  const auto has = [&](ParticleIndex p, ParticleIndex a) {
+    for (std::uint32_t k = 0; k < settled_count[p]; ++k)
+      if (settled[p * wanted + k].attachment == a) return true;
+    return false;
+  };
+  using Entry = std::tuple<double, ParticleIndex, ParticleIndex>;  // length, attachment, particle
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
   for (std::size_t p = 0; p < n; ++p)
-    if (!(inverse_masses[p] > 0) && graph.offsets[p + 1] > graph.offsets[p]) {
-      distance[p] = 0;
-      attachment[p] = ParticleIndex(p);
-      queue.push({0.0, ParticleIndex(p)});
-    }
+    if (!(inverse_masses[p] > 0) && graph.offsets[p + 1] > graph.offsets[p])
+      queue.push({0.0, ParticleIndex(p), ParticleIndex(p)});
   while (!queue.empty()) {
-    const auto [d, p] = queue.top();
+    const auto [d, a, p] = queue.top();
     queue.pop();
-    if (d > distance[p]) continue;
+    if (settled_count[p] == wanted || has(p, a)) continue;
+    settled[p * wanted + settled_count[p]++] = {a, d};
     for (std::uint32_t k = graph.offsets[p]; k < graph.offsets[p + 1]; ++k) {
       const ParticleIndex q = graph.neighbours[k];
-      if (!(inverse_masses[q] > 0)) continue;  // an attachment is its own nearest
-      const double through = d + (rest_positions[p] - rest_positions[q]).cast<double>().norm();
-      if (through < distance[q] || (through == distance[q] && attachment[p] < attachment[q])) {
-        const bool improved = through < distance[q];
-        distance[q] = through;
-        attachment[q] = attachment[p];
-        if (improved) queue.push({through, q});
-      }
+      if (!(inverse_masses[q] > 0) || settled_count[q] == wanted || has(q, a)) continue;
+      queue.push({d + (rest_positions[p] - rest_positions[q]).cast<double>().norm(), a, q});
     }
   }
 
   std::vector<ParticleIndex> pairs;
   std::vector<Real> reach;
   for (std::size_t p = 0; p < n; ++p) {
-    if (!(inverse_masses[p] > 0) || attachment[p] == kNone) continue;
-    const Real d = Real(distance[p] * double(options.reach_scale));
-    if (!(d > 0)) continue;  // coincident with its attachment at rest: nothing to hold
-    pairs.insert(pairs.end(), {ParticleIndex(p), attachment[p]});
-    reach.push_back(d);
+    if (!(inverse_masses[p] > 0)) continue;
+    for (std::uint32_t k = 0; k < settled_count[p]; ++k) {
+      const Settled& s = settled[p * wanted + k];
+      const Real d = Real(s.distance * double(options.reach_scale));
+      if (!(d > 0)) continue;  // coincident with its attachment at rest: nothing to hold
+      pairs.insert(pairs.end(), {ParticleIndex(p), s.attachment});
+      reach.push_back(d);
+    }
   }
   return make_tether_constraints(
       {.particles = pairs,

@@ -302,7 +302,7 @@ SceneDescription describe(const Json& json, const std::string& name,
                           const std::filesystem::path& base) {
   const ObjectReader reader(json, name, "");
   reader.only({"name", "generator", "mesh", "pins", "tethers", "tether_compliance",
-               "tether_reach_scale", "shell", "solid", "gravity", "time_step", "substeps",
+               "tether_reach_scale", "tether_attachments", "shell", "solid", "gravity", "time_step", "substeps",
                "iterations", "frames", "velocity_damping", "chebyshev", "chebyshev_rho",
                "strategy", "mode", "sequential_order", "divergence_rms", "threads",
                "colliders", "thickness", "friction", "dynamic_friction", "restitution",
@@ -342,6 +342,7 @@ SceneDescription describe(const Json& json, const std::string& name,
     description.tethers = TetherRule(tethers);
   reader.read_real("tether_compliance", description.tether_compliance, 0, true);
   reader.read_real("tether_reach_scale", description.tether_reach_scale, 1, true);
+  reader.read_count("tether_attachments", description.tether_attachments, 1);
   if (const Json* shell = reader.find("shell")) read_shell(reader, *shell, description.shell);
   read_collisions(reader, base, description.collisions);
   if (const Json* solid = reader.find("solid")) read_solid(reader, *solid, description.solid);
@@ -467,6 +468,7 @@ SceneDescription parse_scene_spec(std::string_view spec) {
   };
   if (generator("cloth")) {
     description.source = SceneSource::cloth;
+    description.simulation.substeps = kClothSubsteps;
     if (spec.size() > 5) {
       std::string_view sizes = spec.substr(6);
       // "cloth:CxR:alternating": the chequerboard diagonals (DiagonalPattern::alternating).

@@ -611,6 +611,7 @@ Scene build_scene(const SceneDescription& description) {
         mesh.positions,
         std::span(particles.inverse_mass.data(), particles.size()), edges,
         {.reach_scale = description.tether_reach_scale,
+         .attachments = description.tether_attachments,
          .compliance = description.tether_compliance});
   }
   for (const ColliderDescription& collider : description.collisions.colliders) {

@@ -128,11 +128,12 @@ def test_bad_particles_are_value_errors_with_the_message():
 
 def test_scenes_meshes_and_files():
     cloth = tessera.scene("cloth:8")
-    # 161 edges, 28 on the boundary; a tether from each of the 62 movable particles to a pin
-    assert cloth.model.constraint_counts == {"distance": 161, "dihedral": 133, "tether": 62}
+    # 161 edges, 28 on the boundary; two tethers from each of the 62 movable particles, one
+    # to each pin
+    assert cloth.model.constraint_counts == {"distance": 161, "dihedral": 133, "tether": 124}
     assert list(cloth.pinned) == [56, 63]
     np.testing.assert_array_equal(cloth.model.inverse_masses[cloth.pinned], [0, 0])
-    assert cloth.solver_settings()["substeps"] == 32
+    assert cloth.solver_settings()["substeps"] == 160  # the cloth scenes' (kClothSubsteps)
     curtain = tessera.read_scene(tessera_source("examples/scenes/curtain.json"))
     assert curtain.name == "curtain" and curtain.simulation["frames"] == 150
     mesh = tessera.read_mesh(tessera_source("tests/io/data/cube.node"))

@@ -96,8 +96,8 @@ def test_residuals_statistics_and_projection():
     assert report["history"][-1] == report["residual_after"]
     assert set(report["residual_after"]["families"]) == {"distance", "dihedral", "tether"}
     statistics = solver.statistics
-    assert statistics["steps"] == 2 and statistics["projections"] == 2 * 3 * (294 + 62)
-    assert statistics["constraints_per_family"] == {"distance": 161, "dihedral": 133, "tether": 62}
+    assert statistics["steps"] == 2 and statistics["projections"] == 2 * 3 * (294 + 124)
+    assert statistics["constraints_per_family"] == {"distance": 161, "dihedral": 133, "tether": 124}
     before = solver.residual()["rms"]
     solver.project(50)
     assert solver.residual()["rms"] < before

@@ -2,7 +2,10 @@
 // back onto the sphere of radius d beyond it, static particles never move, λ only pulls), the
 // batched kernel against the scalar API on every SIMD target, validation at the door, and
 // make_long_range_attachments' geodesic reaches and nearest attachments.
+#include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include <tessera/core/error.hpp>
 #include <tessera/core/long_range_attachments.hpp>
@@ -229,6 +232,100 @@ TEST(LongRangeAttachments, EachParticleTakesItsNearestAttachmentAndTiesTheSmalle
   EXPECT_NEAR(tethers.max_distance[2], 1, kTolerance);
 }
 
+TEST(LongRangeAttachments, SeveralAttachmentsNearestFirstHoldATautChainStraight) {
+  // A chain 0 - 1 - ... - 6 with both ends fixed, at rest exactly as long as their distance.
+  // With two attachments each, particle i may be no farther than i from 0 and 6 − i from 6:
+  // the two spheres touch only on the segment, so a sag of the middle is a tether violation
+  // (with one, particle 3 could sag anywhere within 3 of particle 0).
+  std::vector<Vector3r> positions;
+  for (int i = 0; i < 7; ++i) positions.emplace_back(Real(i), 0, 0);
+  const std::vector<Real> inverse_masses = {0, 1, 1, 1, 1, 1, 0};
+  std::vector<ParticleIndex> edges;
+  for (ParticleIndex i = 0; i < 6; ++i) edges.insert(edges.end(), {i, ParticleIndex(i + 1)});
+  const TetherConstraints two =
+      make_long_range_attachments(positions, inverse_masses, edges, {.attachments = 2});
+  ASSERT_EQ(two.size(), 10u) << "two per movable particle";
+  for (std::size_t i = 1; i <= 5; ++i) {
+    const std::size_t first = 2 * (i - 1), second = first + 1;
+    EXPECT_EQ(two.particles.particle[0][first], i);
+    EXPECT_EQ(two.particles.particle[0][second], i);
+    // The nearer attachment first; particle 3 is as far from both and takes 0 first.
+    const ParticleIndex nearer = i <= 3 ? 0 : 6, farther = i <= 3 ? 6 : 0;
+    EXPECT_EQ(two.particles.particle[1][first], nearer) << "particle " << i;
+    EXPECT_EQ(two.particles.particle[1][second], farther) << "particle " << i;
+    EXPECT_NEAR(two.max_distance[first], Real(std::min(i, 6 - i)), kTolerance);
+    EXPECT_NEAR(two.max_distance[second], Real(std::max(i, 6 - i)), kTolerance);
+  }
+  // A sagging middle breaks the far tether of both attachments' spheres.
+  std::vector<Vector3r> sagging = positions;
+  sagging[3].y() = Real(-0.5);
+  const Real reach_to_0 = two.max_distance[4], reach_to_6 = two.max_distance[5];
+  EXPECT_GT((sagging[3] - positions[0]).norm(), reach_to_0);
+  EXPECT_GT((sagging[3] - positions[6]).norm(), reach_to_6);
+  // One attachment each is today's default of the core call: the nearest only.
+  EXPECT_EQ(make_long_range_attachments(positions, inverse_masses, edges).size(), 5u);
+  // More than there are attachments gives each particle all of them.
+  EXPECT_EQ(make_long_range_attachments(positions, inverse_masses, edges, {.attachments = 9})
+                .size(),
+            10u);
+}
+
+TEST(LongRangeAttachments, SeveralAttachmentsReachEachAlongItsOwnShortestPath) {
+  // A 4 × 4 grid with three fixed corners: every particle's k-th attachment and reach equal
+  // a brute-force shortest path from each attachment, sorted by (length, number).
+  constexpr int kSide = 4;
+  std::vector<Vector3r> positions;
+  for (int r = 0; r < kSide; ++r)
+    for (int c = 0; c < kSide; ++c) positions.emplace_back(Real(c), Real(r) * Real(1.3), 0);
+  std::vector<Real> inverse_masses(positions.size(), 1);
+  inverse_masses[0] = inverse_masses[kSide - 1] = inverse_masses[kSide * kSide - 1] = 0;
+  std::vector<ParticleIndex> edges;
+  for (int r = 0; r < kSide; ++r)
+    for (int c = 0; c < kSide; ++c) {
+      const auto p = ParticleIndex(r * kSide + c);
+      if (c + 1 < kSide) edges.insert(edges.end(), {p, ParticleIndex(p + 1)});
+      if (r + 1 < kSide) edges.insert(edges.end(), {p, ParticleIndex(p + kSide)});
+      if (c + 1 < kSide && r + 1 < kSide) edges.insert(edges.end(), {p, ParticleIndex(p + kSide + 1)});
+    }
+  // Bellman–Ford from each attachment over movable particles only (a path ends at an attachment).
+  const std::size_t n = positions.size();
+  const auto shortest_from = [&](std::size_t a) {
+    std::vector<double> d(n, 1e30);
+    d[a] = 0;
+    for (std::size_t round = 0; round < n; ++round)
+      for (std::size_t e = 0; e < edges.size(); e += 2)
+        for (int side = 0; side < 2; ++side) {
+          const std::size_t p = edges[e + side], q = edges[e + 1 - side];
+          if (p != a && inverse_masses[p] == 0) continue;
+          if (inverse_masses[q] == 0) continue;
+          d[q] = std::min(d[q], d[p] + (positions[p] - positions[q]).cast<double>().norm());
+        }
+    return d;
+  };
+  const std::vector<std::size_t> attachments = {0, kSide - 1, kSide * kSide - 1};
+  std::vector<std::vector<double>> from;
+  for (const std::size_t a : attachments) from.push_back(shortest_from(a));
+  for (std::size_t k = 1; k <= 3; ++k) {
+    const TetherConstraints tethers =
+        make_long_range_attachments(positions, inverse_masses, edges, {.attachments = k});
+    std::size_t t = 0;
+    for (std::size_t p = 0; p < n; ++p) {
+      if (inverse_masses[p] == 0) continue;
+      std::vector<std::pair<double, std::size_t>> expected;
+      for (std::size_t a = 0; a < attachments.size(); ++a)
+        expected.emplace_back(from[a][p], attachments[a]);
+      std::sort(expected.begin(), expected.end());
+      for (std::size_t j = 0; j < k; ++j, ++t) {
+        ASSERT_LT(t, tethers.size());
+        EXPECT_EQ(tethers.particles.particle[0][t], p);
+        EXPECT_EQ(tethers.particles.particle[1][t], expected[j].second) << "particle " << p << ", k " << k;
+        EXPECT_NEAR(tethers.max_distance[t], Real(expected[j].first), kTolerance);
+      }
+    }
+    EXPECT_EQ(t, tethers.size());
+  }
+}
+
 TEST(LongRangeAttachments, NothingWithoutAttachmentsOrForUnconnectedParticles) {
   const std::vector<Vector3r> positions = {Vector3r(0, 0, 0), Vector3r(1, 0, 0),
                                            Vector3r(5, 0, 0), Vector3r(6, 0, 0)};
@@ -258,6 +355,10 @@ TEST(LongRangeAttachments, BadInputIsNamed) {
             "long-range attachments: 1 inverse masses for 2 particles");
   EXPECT_EQ(error_of(ok, w, Real(0)),
             "long-range attachments: reach scale must be positive and finite");
+  EXPECT_EQ(test::error_of([&] {
+              make_long_range_attachments(positions, w, ok, {.attachments = 0});
+            }),
+            "long-range attachments: attachments per particle must be at least 1");
 }
 
 }  // namespace

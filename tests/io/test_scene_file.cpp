@@ -319,21 +319,32 @@ TEST(BuildScene, ClothDiagonalsAreAnOptionOfTheSpec) {
             "scene 'cloth:5x4:diagonal': expected cloth:N or cloth:CxR with vertex counts, e.g. cloth:256x256");
 }
 
-TEST(BuildScene, PinnedScenesGetTethersToTheirNearestPin) {
-  // 5 × 4 cloth hung from vertices 15 and 19: every other vertex gets one tether, to the
-  // nearer corner along the grid's edges (the middle column depends on the diagonals).
+TEST(BuildScene, PinnedScenesGetTethersToTheirTwoNearestPins) {
+  // 5 × 4 cloth hung from vertices 15 and 19: every other vertex gets two tethers, the nearer
+  // corner along the grid's edges first (the middle column depends on the diagonals).
   SceneDescription description = parse_scene_spec("cloth:5x4");
+  ASSERT_EQ(description.tether_attachments, 2u);
   const Scene scene = build_scene(description);
   const TetherConstraints& tethers = scene.model.constraints.tether;
-  ASSERT_EQ(tethers.size(), 18u);
+  ASSERT_EQ(tethers.size(), 36u);
   for (std::size_t c = 0; c < tethers.size(); ++c) {
     const VertexIndex p = tethers.particles.particle[0][c], pin = tethers.particles.particle[1][c];
-    if (p % 5 != 2) EXPECT_EQ(pin, p % 5 < 2 ? 15u : 19u) << "vertex " << p;
+    EXPECT_EQ(p, tethers.particles.particle[0][c ^ 1]) << "two per vertex, side by side";
+    const VertexIndex nearer = p % 5 < 2 ? 15u : 19u;
+    if (p % 5 != 2) {
+      EXPECT_EQ(pin, c % 2 == 0 ? nearer : 34u - nearer) << "vertex " << p;
+    }
     EXPECT_TRUE(pin == 15 || pin == 19);
+    if (c % 2 == 1) {
+      EXPECT_NE(pin, tethers.particles.particle[1][c - 1]);
+      EXPECT_GE(tethers.max_distance[c], tethers.max_distance[c - 1]) << "nearer first";
+    }
     // Never shorter than the straight rest distance.
     EXPECT_GE(tethers.max_distance[c],
               (scene.mesh.positions[p] - scene.mesh.positions[pin]).norm() * Real(0.99999));
   }
+  description.tether_attachments = 1;
+  EXPECT_EQ(build_scene(description).model.constraints.tether.size(), 18u);
   description.tethers = TetherRule::none;
   EXPECT_EQ(build_scene(description).model.constraints.tether.size(), 0u);
   description.tethers = TetherRule::automatic;
@@ -341,7 +352,7 @@ TEST(BuildScene, PinnedScenesGetTethersToTheirNearestPin) {
   EXPECT_EQ(build_scene(description).model.constraints.tether.size(), 0u) << "nothing to hold";
   // A solid's tethers follow its tetrahedra's edges.
   const Scene bar = build_scene(parse_scene_spec("bar:1x1x2"));
-  EXPECT_EQ(bar.model.constraints.tether.size(), 12u - bar.pinned.size());
+  EXPECT_EQ(bar.model.constraints.tether.size(), 2 * (12u - bar.pinned.size()));
 }
 
 TEST(BuildScene, MeshScenesWithoutPinsHoldAPatchNotOneVertex) {

@@ -11,7 +11,21 @@
 //
 // "Nearest" is by rest path length (ties: the smaller attachment number), found by one
 // Dijkstra search started from every attachment at once: the same answer as one search per
-// attachment followed by a minimum, for the cost of one search. Deterministic.
+// attachment followed by a sort, for the cost of `attachments` searches. Deterministic.
+//
+// How many attachments. One tether to the nearest pin leaves a taut span between two pins
+// free: a cloth hung by two corners exactly its width apart has to carry its weight in the
+// top edge, and the middle of that edge may sag anywhere within its reach of one pin alone,
+// so its edges stretch (the 256² default cloth: 58 % at the middle of the top edge after 1 s).
+// Tethered to both pins, particle i of the span is held within i of one and n − i of the
+// other; the two spheres touch only on the straight span, so the span stays straight.
+//
+//   ●───○───○───○───●     one attachment: the middle ○ may sag to anywhere within its
+//        ╲       ╱           reach of the nearer ●, stretching the edges beside it;
+//         ○─────○            two: within both reaches, which meet only on the straight span
+//
+// Each tether costs one projection of one movable particle; the scenes use two attachments
+// (io::kDefaultTetherAttachments; measured in docs/performance.md, "Accuracy per second").
 #pragma once
 
 #include <cstddef>
@@ -27,6 +41,9 @@ struct LongRangeAttachmentOptions {
   /// Reach = reach_scale × the rest path length; 1 keeps the mesh within its rest reach, a
   /// value above 1 allows that much stretch along the mesh before a tether acts.
   Real reach_scale = 1;
+  /// How many attachments each particle is tethered to, the nearest along the mesh first
+  /// (fewer where fewer are connected). See "How many attachments" above.
+  std::size_t attachments = 1;
   /// Stiffness k ∈ [0, 1] and XPBD compliance α ≥ 0 of every tether.
   Real stiffness = 1;
   Real compliance = 0;

@@ -17,8 +17,8 @@
 // extreme coordinate; a list names vertex numbers.
 //
 // Tethers. "auto" (the default) adds long-range attachments (long_range_attachments.hpp) to
-// any scene with pins: every movable particle tethered to its nearest pinned one along the
-// mesh's edges. "none" leaves them out.
+// any scene with pins: every movable particle tethered to its tether_attachments nearest
+// pinned ones along the mesh's edges (two by default). "none" leaves them out.
 #pragma once
 
 #include <array>
@@ -52,6 +52,19 @@ struct PinRule {
 /// default cloth (60 frames of 32 × 1): 1.02 and 1.05 leave the same RMS residual (0.036 →
 /// 0.038, 0.042) and move the largest from the top edge's middle to a fold; no gain to buy.
 inline constexpr Real kDefaultTetherReachScale = Real(1);
+/// Attachments each movable particle is tethered to, nearest first
+/// (LongRangeAttachmentOptions::attachments). On the default cloth (60 frames of 32 × 1) one
+/// leaves the top edge between the two pins free to sag, its middle edge 58 % long; two hold
+/// that span straight: distance max 0.58 → 0.17, for 12 % more stepping time
+/// (docs/performance.md, "Accuracy per second").
+inline constexpr std::size_t kDefaultTetherAttachments = 2;
+/// Substeps per frame of the cloth scenes (cloth, cloth:N, cloth:CxR): the fewest measured to
+/// end the default scene (256², 60 frames, gs, two tethers per particle) within the accuracy
+/// its users ask for, residual RMS ≤ 0.01 and max ≤ 0.10: 128 × 1 leaves 0.011 / 0.12,
+/// 160 × 1 leaves 0.0088 / 0.085 (64 × 2 leaves 0.015 / 0.24: substeps beat iterations).
+/// Smaller cloths end lower at the same setting (64²: 0.0093 / 0.068 from 64 substeps).
+/// Other scenes keep SimulationSettings' 32.
+inline constexpr std::size_t kClothSubsteps = 160;
 
 /// Whether a scene gets long-range attachments (see the top of this file).
 enum class TetherRule { automatic, none };
@@ -103,9 +116,10 @@ struct SimulationSettings {
   Vector3r gravity = Vector3r(0, Real(-9.81), 0);
   Real time_step = Real(1) / Real(60);
   /// Many substeps of one iteration (XPBD's "small steps"): for the same number of sweeps,
-  /// substeps beat iterations. On the default scene (256² cloth with tethers, 60 frames) 32 × 1
-  /// costs what 16 × 2 does and ends with the residual RMS 0.036 instead of 0.056 and the
-  /// largest 0.58 instead of 3.5 (16 × 4: 0.032 / 0.59 for 1.6× the time).
+  /// substeps beat iterations. On the 256² cloth with one tether per particle (60 frames)
+  /// 32 × 1 costs what 16 × 2 does and ends with the residual RMS 0.036 instead of 0.056 and
+  /// the largest 0.58 instead of 3.5 (16 × 4: 0.032 / 0.59 for 1.6× the time). The cloth
+  /// scenes take kClothSubsteps.
   std::size_t substeps = 32;
   std::size_t iterations = 1;
   std::size_t frames = 60;
@@ -147,6 +161,7 @@ struct SceneDescription {
   /// of the rest path length (LongRangeAttachmentOptions::reach_scale, ≥ 1).
   Real tether_compliance = 0;
   Real tether_reach_scale = kDefaultTetherReachScale;
+  std::size_t tether_attachments = kDefaultTetherAttachments;
   ShellOptions shell;
   SolidOptions solid;
   CollisionDescription collisions;

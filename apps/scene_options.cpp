@@ -46,7 +46,7 @@ void add_scene_options(CLI::App& command, SceneOptions& options) {
   command.add_option("--tether-attachments", options.tether_attachments,
                      "tethers auto: how many pins each particle is tethered to, the nearest along "
                      "the mesh first (default 2)")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20));
+      ->check(integer_from(1, std::size_t(1) << 20));
   command.add_option("--self-collision", options.self_collision,
                      "on or off: the surface's contacts with itself (default: the scene's)");
   command.add_option("--thickness", options.thickness,

@@ -51,7 +51,11 @@ TEST(SceneSpec, GeneratorsWithAndWithoutSizes) {
   EXPECT_EQ(cloth.cloth_rows, 7u);
   EXPECT_EQ(cloth.cloth_diagonals, DiagonalPattern::alternating);
   EXPECT_EQ(parse_scene_spec("cloth:9:alternating").cloth_rows, 9u);
+  // The cloth scenes take their own substeps (the accuracy the default scene is measured to
+  // need); the others keep the simulation's default.
+  EXPECT_EQ(cloth.simulation.substeps, kClothSubsteps);
   const SceneDescription bar = parse_scene_spec("bar:2x3x4");
+  EXPECT_EQ(bar.simulation.substeps, SimulationSettings{}.substeps);
   EXPECT_EQ(bar.source, SceneSource::bar);
   EXPECT_EQ(bar.bar_cells, (std::array<std::size_t, 3>{2, 3, 4}));
   const SceneDescription mesh = parse_scene_spec("meshes/sheet.OBJ");
@@ -86,7 +90,7 @@ TEST(SceneFile, EveryKey) {
     "gravity": [0, 0, -1], "time_step": 0.01, "substeps": 3, "iterations": 7, "frames": 0,
     "velocity_damping": 0.5, "chebyshev": false, "chebyshev_rho": 0.75, "strategy": "dsatur",
     "mode": "hybrid", "threads": 2, "tethers": "none", "tether_compliance": 1e-5,
-    "sequential_order": "input", "divergence_rms": 3})");
+    "tether_attachments": 3, "sequential_order": "input", "divergence_rms": 3})");
   EXPECT_EQ(scene.name, "sheet");
   EXPECT_EQ(scene.source, SceneSource::mesh);
   EXPECT_EQ(scene.mesh_file, std::filesystem::path("/scenes/sheet.obj"));
@@ -118,6 +122,7 @@ TEST(SceneFile, EveryKey) {
   EXPECT_EQ(scene.simulation.threads, 2u);
   EXPECT_EQ(scene.tethers, TetherRule::none);
   EXPECT_FLOAT_EQ(scene.tether_compliance, 1e-5f);
+  EXPECT_EQ(scene.tether_attachments, 3u);
   EXPECT_EQ(scene.simulation.sequential_order, "input");
   EXPECT_FLOAT_EQ(scene.simulation.divergence_rms, 3);
 }
@@ -256,6 +261,8 @@ TEST(SceneFile, ErrorsNameTheKeyOrTheLine) {
             "scene.json: 'substeps' must be a positive integer, not -2");
   EXPECT_EQ(json_error(R"({"generator": "cloth", "substeps": 0})"),
             "scene.json: 'substeps' must be a positive integer up to 2^31, not 0");
+  EXPECT_EQ(json_error(R"({"generator": "cloth", "tether_attachments": 0})"),
+            "scene.json: 'tether_attachments' must be a positive integer up to 2^31, not 0");
   EXPECT_EQ(json_error(R"({"generator": "cloth", "time_step": "fast"})"),
             "scene.json: 'time_step' must be a number in (0, inf), not \"fast\"");
   EXPECT_EQ(json_error(R"({"generator": "cloth", "chebyshev": "yes"})"),

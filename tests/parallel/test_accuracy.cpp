@@ -152,15 +152,15 @@ TEST(Residual, NamesTheWorstConstraintInTheUsersNumbering) {
   }
 }
 
-/// A cloth of n² with its tethers to the two pinned corners.
-Model tethered_cloth(std::size_t n) {
+/// A cloth of n² with tethers to its `attachments` nearest of the two pinned corners.
+Model tethered_cloth(std::size_t n, std::size_t attachments = 1) {
   Model model = test::cloth_model(n, n);
   const io::ClothGrid grid = io::make_cloth_grid(n, n, Real(1) / Real(n - 1));
   std::vector<Vector3r> rest;
   for (std::size_t p = 0; p < model.particles.size(); ++p) rest.push_back(model.particles.position(p));
   model.constraints.tether = make_long_range_attachments(
       rest, std::span(model.particles.inverse_mass.data(), model.particles.size()),
-      grid.edge_indices);
+      grid.edge_indices, {.attachments = attachments});
   return model;
 }
 
@@ -180,6 +180,33 @@ TEST(Tethers, HoldTheHangingClothNearItsRestLength) {
   EXPECT_LT(edges.max, loose_max / 5);
   EXPECT_EQ(tethered.statistics().constraints_per_family[std::size_t(ConstraintFamily::tether)],
             48u * 48u - 2u);
+}
+
+TEST(Tethers, TwoAttachmentsKeepTheSpanBetweenThePinsFromStretching) {
+  // The 48² cloth hangs from two corners of one edge, exactly that edge's length apart: the
+  // edge carries the cloth's weight and can only sag by stretching. Tethered to its nearest
+  // pin alone, the middle of the span may sag within its reach of that pin; tethered to both,
+  // it is held on the straight span (long_range_attachments.hpp, "How many attachments").
+  constexpr std::size_t kSide = 48;
+  const SolverSettings settings = frame_settings(SolverMode::gs, 1);
+  const auto span_stretch = [&](std::size_t attachments) {
+    const Model model = tethered_cloth(kSide, attachments);
+    std::vector<std::size_t> pins;
+    for (std::size_t p = 0; p < model.particles.size(); ++p)
+      if (model.particles.inverse_mass[p] == 0) pins.push_back(p);
+    EXPECT_EQ(pins.size(), 2u);
+    EXPECT_EQ(pins[0] / kSide, pins[1] / kSide) << "both pins on one row";
+    Solver solver = make_solver(model, settings);
+    for (int f = 0; f < 30; ++f) solver.step();
+    const auto x = solver.positions();
+    double worst = 0;
+    for (std::size_t p = pins[0]; p < pins[1]; ++p)
+      worst = std::max(worst, double((x[p + 1] - x[p]).norm()) * double(kSide - 1) - 1);
+    return worst;
+  };
+  const double one = span_stretch(1), two = span_stretch(2);
+  EXPECT_GT(one, 0.05) << "one tether each: the span sags and stretches";
+  EXPECT_LT(two, one / 2.5) << "two: " << two << ", one: " << one;
 }
 
 TEST(Tethers, AnyThreadCountAndEveryModeGiveBitwiseTheSameState) {

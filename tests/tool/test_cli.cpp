@@ -148,6 +148,16 @@ TEST_F(Cli, RunSummaryHoldsEveryKey) {
   EXPECT_EQ(run_json({"run", "cloth:12x10", "--frames", "1", "--tethers", "none"})
                 .contains("residual_tether_rms_final"),
             false);
+  // Two tethers per movable particle by default (one to each of the two pins), one when asked.
+  const auto constraints_with = [&](const char* attachments) {
+    return run_json({"run", "cloth:12x10", "--frames", "1", "--tether-attachments", attachments})
+        ["constraints"].get<std::uint64_t>();
+  };
+  const std::uint64_t movable = 12 * 10 - 2;
+  EXPECT_EQ(summary["constraints"].get<std::uint64_t>() - constraints_with("1"), movable);
+  EXPECT_EQ(constraints_with("2"), summary["constraints"].get<std::uint64_t>());
+  EXPECT_EQ(constraints_with("5"), summary["constraints"].get<std::uint64_t>()) << "only 2 pins";
+  EXPECT_EQ(summary["substeps"], 160) << "the cloth scenes' substeps";
 }
 
 // Divergence is a failure: the input order at 16 x 1 diverges on a 64² distance cloth; with
@@ -410,6 +420,7 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
       {{"run", "--chebyshev-rho", "1"}, "tessera run: --chebyshev-rho: must be a number in (0, 1), not '1'"},
       {{"run", "--mode", "fast"}, "tessera run: unknown solver mode 'fast' (known: gs, jacobi, hybrid, sequential)"},
       {{"run", "--tethers", "some"}, "tessera run: --tethers: unknown value 'some' (known: auto, none)"},
+      {{"run", "--tether-attachments", "0"}, "tessera run: --tether-attachments: must be an integer from 1 to 1048576, not '0'"},
       {{"run", "--sequential-order", "random"}, "tessera run: unknown sequential order 'random' (known: groups, input)"},
       {{"run", "--divergence-rms", "0"}, "tessera run: --divergence-rms: must be a number above 0 or inf, not '0'"},
       {{"run", "--strategy", "nope"}, "tessera run: unknown colouring strategy 'nope' " + strategies},

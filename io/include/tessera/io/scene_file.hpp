@@ -16,6 +16,7 @@
 //     "mesh": "sheet.obj",                   // a mesh file, relative to the scene file
 //     "pins": "default",                     // "none", "lowest-y", "highest-x", ... or [0, 17]
 //     "tethers": "auto", "tether_compliance": 0,  // or "none": no long-range attachments
+//     "tether_attachments": 2,               // pins each particle is tethered to, nearest first
 //     "shell": { "material": "distance",     // or "strain_triangle", "fem_triangle"
 //                "bending": "dihedral",      // or "isometric", "none"
 //                "distance_compliance": 0, "bending_compliance": 1e-3,

@@ -41,7 +41,7 @@ void add_scene_options(CLI::App& command, SceneOptions& options) {
   command.add_option("--pins", options.pins,
                      "default, none, lowest-x|y|z or highest-x|y|z");
   command.add_option("--tethers", options.tethers,
-                     "auto (default: every movable particle tethered to its nearest pin along "
+                     "auto (default: every movable particle tethered to its nearest pins along "
                      "the mesh) or none");
   command.add_option("--tether-attachments", options.tether_attachments,
                      "tethers auto: how many pins each particle is tethered to, the nearest along "

@@ -52,6 +52,9 @@ FULL_PLAN = [
     (DEFAULT_SCENE, grid("16x2,32x1,64x1,32x2"), ["gs", "jacobi", "hybrid"], ["auto", "none"]),
     (DEFAULT_SCENE, grid("8x4,16x4"), ["gs"], ["auto", "none"]),
     (DEFAULT_SCENE, grid("32x1"), ["sequential"], ["auto", "none"]),
+    # The default (kClothSubsteps = 160) and the cheapest point within the stretch bounds.
+    (DEFAULT_SCENE, grid("128x1,160x1"), ["gs", "hybrid"], ["auto", "none"]),
+    (DEFAULT_SCENE, grid("160x1"), ["sequential"], ["auto"]),
     ("bar:10x10x40", grid("8x4,16x2,32x1,64x1,32x2"), ["gs", "jacobi", "hybrid"], ["auto", "none"]),
     ("bar:10x10x40", grid("16x2,32x1"), ["sequential"], ["auto", "none"]),
     ("cloth:1024x1024", grid("32x1"), ["gs"], ["auto"]),

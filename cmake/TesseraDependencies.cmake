@@ -5,6 +5,12 @@ find_package(TBB REQUIRED)                    # libtbb-dev (oneTBB 2021)
 find_package(METIS REQUIRED)                  # libmetis-dev, see FindMETIS.cmake
 find_package(hwy 1.0 REQUIRED)                # libhwy-dev (Highway: SIMD with runtime dispatch)
 find_package(nlohmann_json 3.10 REQUIRED)      # nlohmann-json3-dev (scene files; used privately)
+# Optional: the distributed solver's transport (tessera::distributed, distributed_solver.hpp).
+find_package(MPI COMPONENTS CXX QUIET)         # libopenmpi-dev, openmpi-bin
+option(TESSERA_MPI "Build the distributed solver over MPI (on when Open MPI is found)" ${MPI_CXX_FOUND})
+if(TESSERA_MPI AND NOT MPI_CXX_FOUND)
+  message(FATAL_ERROR "TESSERA_MPI is on but no MPI was found: install libopenmpi-dev and openmpi-bin (scripts/setup)")
+endif()
 
 # TESSERA_SIMD: how the batched kernels pick their instruction set.
 #   dispatch (default)  compile for AVX-512, AVX2, SSE4 and a portable fallback, and pick the

@@ -4,7 +4,7 @@
 
 #include <bit>
 
-#include "batch_reorder.hpp"
+#include <tessera/core/batch_reorder.hpp>
 #include "jacobi_set.hpp"
 
 namespace tessera::detail {

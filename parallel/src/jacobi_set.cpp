@@ -11,7 +11,7 @@
 #include <limits>
 #include <utility>
 
-#include "batch_reorder.hpp"
+#include <tessera/core/batch_reorder.hpp>
 
 namespace tessera::detail {
 

@@ -21,7 +21,7 @@
 #include <tessera/core/simd.hpp>
 #include <tessera/parallel/threads.hpp>
 
-#include "batch_reorder.hpp"
+#include <tessera/core/batch_reorder.hpp>
 #include "jacobi_set.hpp"
 
 namespace tessera {

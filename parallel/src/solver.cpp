@@ -20,7 +20,7 @@
 #include <tessera/core/sequential_projection.hpp>
 #include <tessera/parallel/threads.hpp>
 
-#include "batch_reorder.hpp"
+#include <tessera/core/batch_reorder.hpp>
 #include "contact_colouring.hpp"
 #include "jacobi_set.hpp"
 #include "residual_sum.hpp"
@@ -419,7 +419,25 @@ void Solver::iterate(const ProjectionSettings& projection, std::size_t iteration
   chebyshev_weight_ = iteration <= delay     ? Real(1)
                       : iteration == delay + 1 ? Real(2) / (Real(2) - rho2)
                                                : Real(4) / (Real(4) - rho2 * chebyshev_weight_);
-  for (const Stage& stage : stages_) run_stage(stage, projection);
+  if (!phase_hook_) {
+    for (const Stage& stage : stages_) run_stage(stage, projection);
+    return;
+  }
+  phase_hook_(kBeforePhases, ParticleArrays::of(state_));
+  std::size_t phase = 0;
+  for (const Stage& stage : stages_) {
+    run_stage(stage, projection);
+    if (stage.kind == StageKind::coloured_phase && stage.set == StageSet::coloured)
+      phase_hook_(phase++, ParticleArrays::of(state_));
+  }
+}
+
+void Solver::set_phase_hook(PhaseHook hook) {
+  if (hook && settings_.mode != SolverMode::gs)
+    throw InvalidInput(std::string("set_phase_hook: mode ") +
+                       std::string(solver_mode_name(settings_.mode)) +
+                       " has no coloured phases between which to run it (mode gs has)");
+  phase_hook_ = std::move(hook);
 }
 
 bool Solver::guards_divergence() const {

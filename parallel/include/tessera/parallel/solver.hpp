@@ -26,6 +26,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -277,6 +278,16 @@ class Solver {
   /// The particles in the schedule's numbering, for code that works on the arrays.
   const ParticleState& scheduled_state() const { return state_; }
 
+  /// Code that must run between the colours of mode gs (the distributed solver's exchanges:
+  /// distributed/). Every iteration calls it with kBeforePhases before its first coloured
+  /// phase, then after each coloured phase with that phase's number (0, 1, ... in the order
+  /// the phases run: colour k of the colouring is phase k), with the particles in the
+  /// schedule's numbering to read and write. An empty function removes it. Throws
+  /// InvalidInput in another mode.
+  using PhaseHook = std::function<void(std::size_t phase, ParticleArrays particles)>;
+  static constexpr std::size_t kBeforePhases = ~std::size_t(0);
+  void set_phase_hook(PhaseHook hook);
+
  private:
   void check_particle(ParticleIndex particle) const;
   std::size_t dynamic_user_index(ConstraintFamily family, std::uint32_t slot) const;
@@ -335,6 +346,7 @@ class Solver {
   /// the slots are the caller's order).
   std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> dynamic_source_;
   std::vector<Stage> stages_, velocity_stages_;
+  PhaseHook phase_hook_;
   /// Chebyshev acceleration: the schedule's Jacobi set's particles (JacobiSet::particles
   /// order) one iteration before the last, the iteration under way and its weight ω.
   std::array<AlignedVector<Real>, 3> chebyshev_previous_;

@@ -1,15 +1,18 @@
-// Reordering a batch through a list of source constraints: the scheduled batch's slot j holds
+// Reordering a batch through a list of source constraints (the schedule, the Jacobi sets, the
+// distributed solver's per-rank models): the scheduled batch's slot j holds
 // constraint source[j] of the input (an empty constraint where source[j] is the padding mark),
 // with its particles renamed. Generic over every family through its description
 // (per_constraint_arrays, batch_wide_fields, and the particle slots or the CSR layout of
 // constraint_families.hpp), so a field a family adds is carried along or the build fails.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <tuple>
 #include <type_traits>
+#include <vector>
 
 #include <tessera/core/constraint_families.hpp>
 

@@ -1,0 +1,282 @@
+// The solver on many ranks, exact mode (distributed_solver.hpp): the rank's part of the model
+// built through the decomposition, the ordinary Solver on it, and the colour exchanges run
+// from its phase hook.
+#include <tessera/distributed/distributed_solver.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <utility>
+
+#include <tessera/core/batch_reorder.hpp>
+#include <tessera/core/error.hpp>
+
+namespace tessera {
+namespace {
+
+MPI_Datatype real_type() { return std::is_same_v<Real, double> ? MPI_DOUBLE : MPI_FLOAT; }
+
+constexpr std::uint32_t kNoSource = std::numeric_limits<std::uint32_t>::max();
+
+/// The particles of `held` (global ids, ascending) as a model of their own.
+ParticleState particles_held(const ParticleState& all, const std::vector<ParticleIndex>& held) {
+  ParticleState part(held.size());
+  const auto copy = [&](AlignedVector<Real>& to, const AlignedVector<Real>& from) {
+    for (std::size_t i = 0; i < held.size(); ++i) to[i] = from[held[i]];
+  };
+  copy(part.x, all.x);
+  copy(part.y, all.y);
+  copy(part.z, all.z);
+  copy(part.inverse_mass, all.inverse_mass);
+  copy(part.previous_x, all.previous_x);
+  copy(part.previous_y, all.previous_y);
+  copy(part.previous_z, all.previous_z);
+  copy(part.velocity_x, all.velocity_x);
+  copy(part.velocity_y, all.velocity_y);
+  copy(part.velocity_z, all.velocity_z);
+  return part;
+}
+
+}  // namespace
+
+DistributedSolver::DistributedSolver(const Model& model, const Colouring& colouring,
+                                     SolverSettings settings, MPI_Comm communicator)
+    : communicator_(communicator), divergence_rms_(settings.divergence_rms) {
+  if (settings.mode != SolverMode::gs)
+    throw InvalidInput(std::string("distributed exact mode: solver mode must be gs, not ") +
+                       std::string(solver_mode_name(settings.mode)));
+  if (colouring.renumbers_particles())
+    throw InvalidInput("distributed exact mode: the colouring renumbers particles (strategy "
+                       "metis); use one that keeps the model's numbering");
+  MPI_Comm_rank(communicator_, &rank_);
+  MPI_Comm_size(communicator_, &rank_count_);
+  const Decomposition plan = decompose(model, colouring, std::size_t(rank_count_));
+  const RankDomain& mine = plan.ranks[std::size_t(rank_)];
+
+  // Held particles (owned and ghosts) in ascending global order; local index = position.
+  std::merge(mine.owned.begin(), mine.owned.end(), mine.ghosts.begin(), mine.ghosts.end(),
+             std::back_inserter(held_));
+  const auto local_of = [&](ParticleIndex global) {
+    return std::uint32_t(std::lower_bound(held_.begin(), held_.end(), global) - held_.begin());
+  };
+  for (const ParticleIndex p : mine.owned) owned_local_.push_back(local_of(p));
+  if (rank_ == 0)
+    for (const RankDomain& domain : plan.ranks) owned_of_rank_.push_back(domain.owned);
+
+  // The owned constraints, family by family (global ids run through the families in order),
+  // their particles renamed to local indices.
+  Model part;
+  part.particles = particles_held(model.particles, held_);
+  std::size_t next = 0;
+  model.constraints.for_each([&](ConstraintFamily family, const auto& batch) {
+    const ConstraintIndex first = batch.size() == 0 ? 0 : model.constraint_id(family, 0);
+    std::vector<std::uint32_t> source;
+    while (next < mine.constraints.size() && batch.size() != 0 &&
+           mine.constraints[next] < first + batch.size())
+      source.push_back(std::uint32_t(mine.constraints[next++] - first));
+    using Batch = std::decay_t<decltype(batch)>;
+    auto& out = part.constraints.of_type<Batch>();
+    out = detail::reorder_batch(batch, source, kNoSource, held_.size(),
+                                [&](std::size_t, std::size_t, ParticleIndex p) { return local_of(p); });
+  });
+
+  // Local colours: the global colours this rank has constraints in, in order.
+  colour_count_ = colouring.colour_count();
+  std::vector<Colour> global_colour(mine.constraints.size());
+  for (std::size_t i = 0; i < mine.constraints.size(); ++i)
+    global_colour[i] = colouring.colour_of(mine.constraints[i]);
+  std::vector<Colour> present(global_colour);
+  std::sort(present.begin(), present.end());
+  present.erase(std::unique(present.begin(), present.end()), present.end());
+  phase_colour_.assign(present.begin(), present.end());
+  std::vector<Colour> local_colour(global_colour.size());
+  for (std::size_t i = 0; i < global_colour.size(); ++i)
+    local_colour[i] = Colour(std::lower_bound(present.begin(), present.end(), global_colour[i]) -
+                             present.begin());
+
+  // The plan's transfers in local indices.
+  sends_.resize(colour_count_);
+  receives_.resize(colour_count_);
+  for (std::size_t k = 0; k < colour_count_; ++k) {
+    for (const RankExchange& send : mine.sends[k]) {
+      Transfer& t = sends_[k].emplace_back(Transfer{int(send.rank), {}});
+      for (const ParticleIndex p : send.particles) t.local.push_back(local_of(p));
+    }
+    for (const RankExchange& receive : mine.receives[k]) {
+      Transfer& t = receives_[k].emplace_back(Transfer{int(receive.rank), {}});
+      for (const ParticleIndex p : receive.particles) t.local.push_back(local_of(p));
+    }
+  }
+
+  statistics_.ranks = std::size_t(rank_count_);
+  statistics_.owned_particles = mine.owned.size();
+  statistics_.ghost_particles = mine.ghosts.size();
+  statistics_.constraints = mine.constraints.size();
+
+  // The finite and divergence checks are collective (step()); the rank's solver must not
+  // throw on its own, or the other ranks would wait for it forever.
+  check_finite_ = settings.check_finite;
+  settings.check_finite = false;
+  settings.divergence_rms = std::numeric_limits<Real>::infinity();
+  settings.report_residuals = false;
+  solver_ = std::make_unique<Solver>(std::move(part), Colouring::from_colours(local_colour),
+                                     settings);
+  solver_->set_phase_hook([this](std::size_t phase, ParticleArrays particles) {
+    const std::size_t first = phase == Solver::kBeforePhases ? 0 : phase_colour_[phase];
+    const std::size_t next_phase = phase == Solver::kBeforePhases ? 0 : phase + 1;
+    const std::size_t last =
+        next_phase < phase_colour_.size() ? phase_colour_[next_phase] : colour_count_;
+    exchange(first, last, particles);
+  });
+}
+
+void DistributedSolver::exchange(std::size_t first, std::size_t last, ParticleArrays particles) {
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t k = first; k < last; ++k) {
+    const auto& sends = sends_[k];
+    const auto& receives = receives_[k];
+    if (sends.empty() && receives.empty()) continue;
+    std::size_t send_reals = 0, receive_reals = 0;
+    for (const Transfer& t : sends) send_reals += 3 * t.local.size();
+    for (const Transfer& t : receives) receive_reals += 3 * t.local.size();
+    send_buffer_.resize(send_reals);
+    receive_buffer_.resize(receive_reals);
+    requests_.clear();
+    const int tag = int(k % 32768);  // MPI guarantees tags up to 32767; order is per pair
+    std::size_t offset = 0;
+    for (const Transfer& t : receives) {
+      requests_.emplace_back();
+      MPI_Irecv(receive_buffer_.data() + offset, int(3 * t.local.size()), real_type(), t.rank,
+                tag, communicator_, &requests_.back());
+      offset += 3 * t.local.size();
+    }
+    offset = 0;
+    for (const Transfer& t : sends) {
+      Real* out = send_buffer_.data() + offset;
+      for (std::size_t i = 0; i < t.local.size(); ++i) {
+        out[3 * i] = particles.x[t.local[i]];
+        out[3 * i + 1] = particles.y[t.local[i]];
+        out[3 * i + 2] = particles.z[t.local[i]];
+      }
+      requests_.emplace_back();
+      MPI_Isend(out, int(3 * t.local.size()), real_type(), t.rank, tag, communicator_,
+                &requests_.back());
+      offset += 3 * t.local.size();
+      ++statistics_.messages_sent;
+      statistics_.bytes_sent += 3 * t.local.size() * sizeof(Real);
+    }
+    MPI_Waitall(int(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
+    offset = 0;
+    for (const Transfer& t : receives) {
+      const Real* in = receive_buffer_.data() + offset;
+      for (std::size_t i = 0; i < t.local.size(); ++i) {
+        particles.x[t.local[i]] = in[3 * i];
+        particles.y[t.local[i]] = in[3 * i + 1];
+        particles.z[t.local[i]] = in[3 * i + 2];
+      }
+      offset += 3 * t.local.size();
+    }
+  }
+  statistics_.seconds_exchange +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void DistributedSolver::step() {
+  solver_->step();
+  if (check_finite_) {
+    int finite = 1;
+    for (const std::uint32_t i : owned_local_) {
+      const Vector3r x = solver_->position(ParticleIndex(i));
+      if (!x.allFinite()) {
+        finite = 0;
+        break;
+      }
+    }
+    int all_finite = 1;
+    MPI_Allreduce(&finite, &all_finite, 1, MPI_INT, MPI_MIN, communicator_);
+    if (!all_finite)
+      throw NumericalFailure("distributed step " +
+                             std::to_string(solver_->statistics().steps) +
+                             ": a position became non-finite on some rank");
+  }
+  if (std::isfinite(divergence_rms_)) {
+    const Residual after = residual();
+    if (after.rms > double(divergence_rms_))
+      throw NumericalFailure("distributed step " + std::to_string(solver_->statistics().steps) +
+                             ": diverged (residual RMS " + std::to_string(after.rms) +
+                             " above the bound " + std::to_string(divergence_rms_) + ")");
+  }
+}
+
+Residual DistributedSolver::residual() {
+  const Residual local = solver_->residual();
+  // Per family: constraint count, sum of squares, max; summed and maxed over the ranks.
+  constexpr std::size_t F = kConstraintFamilyCount;
+  std::vector<double> sums(2 * F, 0.0), maxima(F, 0.0);
+  for (std::size_t f = 0; f < F; ++f) {
+    const FamilyResidual& family = local.families[f];
+    sums[f] = double(family.constraints);
+    sums[F + f] = family.rms * family.rms * double(family.constraints);
+    maxima[f] = family.max;
+  }
+  std::vector<double> total_sums(2 * F), total_maxima(F);
+  MPI_Allreduce(sums.data(), total_sums.data(), int(2 * F), MPI_DOUBLE, MPI_SUM, communicator_);
+  MPI_Allreduce(maxima.data(), total_maxima.data(), int(F), MPI_DOUBLE, MPI_MAX, communicator_);
+  Residual result;
+  double squares = 0;
+  for (std::size_t f = 0; f < F; ++f) {
+    FamilyResidual& family = result.families[f];
+    family.constraints = std::size_t(total_sums[f]);
+    family.max = total_maxima[f];
+    family.rms = family.constraints ? std::sqrt(total_sums[F + f] / total_sums[f]) : 0.0;
+    family.worst = local.families[f].worst;
+    result.constraints += family.constraints;
+    squares += total_sums[F + f];
+    if (family.constraints && family.max > result.max) {
+      result.max = family.max;
+      result.worst_family = ConstraintFamily(f);
+    }
+  }
+  result.rms = result.constraints ? std::sqrt(squares / double(result.constraints)) : 0.0;
+  return result;
+}
+
+std::vector<Vector3r> DistributedSolver::gather_positions() {
+  std::vector<Real> mine(3 * owned_local_.size());
+  for (std::size_t i = 0; i < owned_local_.size(); ++i) {
+    const Vector3r x = solver_->position(ParticleIndex(owned_local_[i]));
+    mine[3 * i] = x.x();
+    mine[3 * i + 1] = x.y();
+    mine[3 * i + 2] = x.z();
+  }
+  std::vector<int> counts, displacements;
+  std::vector<Real> all;
+  if (rank_ == 0) {
+    int offset = 0;
+    for (const auto& owned : owned_of_rank_) {
+      counts.push_back(int(3 * owned.size()));
+      displacements.push_back(offset);
+      offset += counts.back();
+    }
+    all.resize(std::size_t(offset));
+  }
+  MPI_Gatherv(mine.data(), int(mine.size()), real_type(), all.data(), counts.data(),
+              displacements.data(), real_type(), 0, communicator_);
+  std::vector<Vector3r> positions;
+  if (rank_ != 0) return positions;
+  std::size_t count = 0;
+  for (const auto& owned : owned_of_rank_) count += owned.size();
+  positions.resize(count);
+  std::size_t at = 0;
+  for (const auto& owned : owned_of_rank_)
+    for (const ParticleIndex p : owned) {
+      positions[p] = Vector3r(all[3 * at], all[3 * at + 1], all[3 * at + 2]);
+      ++at;
+    }
+  return positions;
+}
+
+}  // namespace tessera

@@ -16,6 +16,7 @@
 #include <tessera/core/error.hpp>
 #include <tessera/parallel/solver.hpp>
 
+#include "batch_test_support.hpp"
 #include "scenes.hpp"
 #include "test_support.hpp"
 
@@ -452,6 +453,43 @@ TEST(Solver, LongRunStaysFiniteWithBoundedEnergy) {
   // And it still holds together: edges stretch most at the two pinned corners, which carry
   // the whole cloth with 4 iterations per substep.
   EXPECT_LT(solver.last_step().residual_after.of(ConstraintFamily::distance).rms, 1.0);
+}
+
+TEST(SolverPhaseHook, RunsBeforeTheColoursAndAfterEachInOrderAndChangesNothingByItself) {
+  // A 12² cloth in mode gs: every iteration calls the hook once before its phases and once
+  // after each colour, in colour order; a hook that writes nothing leaves the state bitwise
+  // that of a solver without it; another mode refuses a hook.
+  const Model model = test::cloth_model(12, 12);
+  SolverSettings settings;
+  settings.mode = SolverMode::gs;
+  settings.substeps = 2;
+  settings.iterations = 3;
+  Solver plain = test::make_solver(model, settings);
+  Solver hooked = test::make_solver(model, settings);
+  const std::size_t colours = hooked.schedule().phase_count();
+  ASSERT_GT(colours, 1u);
+  std::vector<std::size_t> calls;
+  hooked.set_phase_hook([&](std::size_t phase, ParticleArrays particles) {
+    EXPECT_EQ(particles.count, model.particles.size());
+    calls.push_back(phase);
+  });
+  plain.step();
+  hooked.step();
+  std::vector<std::size_t> expected;
+  for (std::size_t sweep = 0; sweep < 2 * 3; ++sweep) {
+    expected.push_back(Solver::kBeforePhases);
+    for (std::size_t k = 0; k < colours; ++k) expected.push_back(k);
+  }
+  EXPECT_EQ(calls, expected);
+  EXPECT_TRUE(test::same_bits(plain.positions(), hooked.positions()));
+  hooked.set_phase_hook({});
+  hooked.step();
+  EXPECT_EQ(calls.size(), expected.size()) << "removed";
+  settings.mode = SolverMode::jacobi;
+  Solver jacobi = test::make_solver(model, settings);
+  EXPECT_EQ(test::error_of([&] { jacobi.set_phase_hook([](std::size_t, ParticleArrays) {}); }),
+            "set_phase_hook: mode jacobi has no coloured phases between which to run it (mode "
+            "gs has)");
 }
 
 }  // namespace

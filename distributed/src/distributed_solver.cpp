@@ -48,9 +48,6 @@ DistributedSolver::DistributedSolver(const Model& model, const Colouring& colour
   if (settings.mode != SolverMode::gs)
     throw InvalidInput(std::string("distributed exact mode: solver mode must be gs, not ") +
                        std::string(solver_mode_name(settings.mode)));
-  if (colouring.renumbers_particles())
-    throw InvalidInput("distributed exact mode: the colouring renumbers particles (strategy "
-                       "metis); use one that keeps the model's numbering");
   MPI_Comm_rank(communicator_, &rank_);
   MPI_Comm_size(communicator_, &rank_count_);
   const Decomposition plan = decompose(model, colouring, std::size_t(rank_count_));

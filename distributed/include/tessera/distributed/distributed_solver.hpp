@@ -48,9 +48,10 @@ struct DistributedStatistics {
 class DistributedSolver {
  public:
   /// Collective over `communicator`. settings.mode must be gs (exact mode follows the
-  /// colours); the colouring must colour constraint_graph(model) and keep the model's particle
-  /// numbering (a colouring that renumbers particles, like metis's, is refused). Throws
-  /// InvalidInput otherwise, or for what Solver refuses. settings.check_finite and the
+  /// colours); the colouring must colour constraint_graph(model). Its particle renumbering,
+  /// if any (metis, the locality pass), is one process's memory layout and is not used: each
+  /// rank numbers what it holds in ascending global order, and no constraint's arithmetic
+  /// depends on the numbering. Throws InvalidInput otherwise, or for what Solver refuses. settings.check_finite and the
   /// divergence bound are applied collectively after each step (step() throws
   /// NumericalFailure on every rank when any rank has a non-finite position).
   DistributedSolver(const Model& model, const Colouring& colouring, SolverSettings settings,

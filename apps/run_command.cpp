@@ -19,6 +19,9 @@
 #include <tessera/parallel/threads.hpp>
 
 #include "commands.hpp"
+#ifdef TESSERA_MPI
+#include "distributed_run.hpp"
+#endif
 #include "frame_output.hpp"
 #include "option_checks.hpp"
 #include "progress_bar.hpp"
@@ -99,10 +102,29 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
                       "created if its parent exists)");
   command->add_flag("--obj", options.write_obj, "with --out: also DIR/frame_NNNNN.obj");
   command->add_flag("--json", options.json, "print the summary as one JSON object");
+  command->add_option("--distributed", options.distributed,
+                      "exact: split the run over the ranks mpirun starts (mpirun -np N tessera "
+                      "run ... --distributed exact); the same positions as one process");
   return command;
 }
 
 int run_command(const RunOptions& options) {
+  if (options.distributed) {
+#ifdef TESSERA_MPI
+    // Every check runs on every rank, inside the collective agreement on failures.
+    return run_distributed(options, [&] {
+      if (options.write_obj && !options.out) throw InvalidInput("--obj needs --out DIR");
+      RunSetup setup;
+      setup.description = describe_scene(options.scene);
+      setup.simulation = simulation_of(setup.description, options);
+      setup.settings = solver_settings(setup.simulation);
+      return setup;
+    });
+#else
+    throw InvalidInput("--distributed: this build has no MPI (configure with TESSERA_MPI=ON, "
+                       "Open MPI installed: scripts/setup)");
+#endif
+  }
   const auto start = std::chrono::steady_clock::now();
   if (options.write_obj && !options.out) throw InvalidInput("--obj needs --out DIR");
   const io::SceneDescription description = describe_scene(options.scene);

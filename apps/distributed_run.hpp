@@ -1,0 +1,26 @@
+// `tessera run --distributed MODE`: the run command on many ranks (built with TESSERA_MPI).
+#pragma once
+
+#include <functional>
+
+#include <tessera/io/scene_description.hpp>
+#include <tessera/parallel/solver.hpp>
+
+#include "commands.hpp"
+
+namespace tessera::cli {
+
+/// The scene and settings a run uses, from its options.
+struct RunSetup {
+  io::SceneDescription description;
+  io::SimulationSettings simulation;
+  SolverSettings settings;
+};
+
+/// Runs the scene `setup()` describes (called on every rank: it checks the options) with
+/// DistributedSolver on MPI_COMM_WORLD, initialising MPI if needed, and prints the summary on
+/// rank 0. Returns the exit code; rank 0 throws the agreed failure (InvalidInput or another
+/// exception) for main to print, the other ranks return its code.
+int run_distributed(const RunOptions& options, const std::function<RunSetup()>& setup);
+
+}  // namespace tessera::cli

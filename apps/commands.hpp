@@ -47,4 +47,7 @@ struct InfoOptions {
 CLI::App* add_info_command(CLI::App& app, InfoOptions& options);
 int info_command(const InfoOptions& options);
 
+/// Prints "tessera[ <command>]: <message>" as exactly one line on stderr (every failure).
+void print_error(const std::string& command, std::string message);
+
 }  // namespace tessera::cli

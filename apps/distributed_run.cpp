@@ -91,11 +91,12 @@ Failure agreed(const MpiSession& mpi, Work&& work) {
   return {header[0], std::move(message)};
 }
 
-/// Rank 0 throws the agreed failure for main to print; the others return its exit code.
+/// Rank 0 prints the agreed failure; every rank returns its exit code once it has (mpirun
+/// stops the job when the first rank exits with an error, which must not be before the line).
 int end_with(const MpiSession& mpi, const Failure& failure) {
-  if (mpi.rank() != 0) return failure.code;
-  if (failure.code == 2) throw InvalidInput(failure.message);
-  throw std::runtime_error(failure.message);
+  if (mpi.rank() == 0) print_error("run", failure.message);
+  MPI_Barrier(MPI_COMM_WORLD);
+  return failure.code;
 }
 
 double max_over_ranks(double value) {

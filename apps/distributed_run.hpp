@@ -19,8 +19,8 @@ struct RunSetup {
 
 /// Runs the scene `setup()` describes (called on every rank: it checks the options) with
 /// DistributedSolver on MPI_COMM_WORLD, initialising MPI if needed, and prints the summary on
-/// rank 0. Returns the exit code; rank 0 throws the agreed failure (InvalidInput or another
-/// exception) for main to print, the other ranks return its code.
+/// rank 0. Returns the exit code: on a failure agreed over the ranks, rank 0 prints its one
+/// line and every rank returns its code (2 for bad input, 1 otherwise).
 int run_distributed(const RunOptions& options, const std::function<RunSetup()>& setup);
 
 }  // namespace tessera::cli

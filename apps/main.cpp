@@ -17,18 +17,18 @@
 
 #include "commands.hpp"
 
-namespace {
+namespace tessera::cli {
 
-/// Prints "tessera[ <command>]: <message>" as exactly one line.
 void print_error(const std::string& command, std::string message) {
   for (char& c : message)
     if (c == '\n' || c == '\r') c = ' ';
   while (!message.empty() && message.back() == ' ') message.pop_back();
   std::fprintf(stderr, "tessera%s%s: %s\n", command.empty() ? "" : " ", command.c_str(),
                message.c_str());
+  std::fflush(stderr);
 }
 
-}  // namespace
+}  // namespace tessera::cli
 
 int main(int argc, char** argv) {
   using namespace tessera::cli;

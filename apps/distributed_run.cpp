@@ -1,4 +1,4 @@
-// `tessera run --distributed exact` under mpirun: every rank loads the scene and colours it
+// `tessera run --distributed exact|block` under mpirun: every rank loads the scene and colours it
 // (the same answer everywhere), keeps its part (DistributedSolver), and steps it; rank 0
 // gathers the positions, writes the frames and prints the summary. Failures are agreed on
 // collectively, so that bad input on one rank ends every rank, with one line on stderr (the
@@ -131,11 +131,11 @@ int run_distributed(const RunOptions& options, const std::function<RunSetup()>& 
     description = std::move(chosen.description);
     simulation = std::move(chosen.simulation);
     settings = chosen.settings;
-    if (options.distributed != "exact")
+    if (options.distributed != "exact" && options.distributed != "block")
       throw InvalidInput("--distributed: unknown value '" + *options.distributed +
-                         "' (known: exact)");
+                         "' (known: exact, block)");
     if (settings.mode != SolverMode::gs)
-      throw InvalidInput(std::string("--distributed exact: mode must be gs, not ") +
+      throw InvalidInput("--distributed " + *options.distributed + ": mode must be gs, not " +
                          std::string(solver_mode_name(settings.mode)));
     scene.emplace(io::build_scene(description));
     if (description.collisions.enabled())
@@ -150,7 +150,8 @@ int run_distributed(const RunOptions& options, const std::function<RunSetup()>& 
     colouring.emplace(run_colouring(registry.get(simulation.strategy), graph,
                                     ColouringOptions{.balance = options.balance, .locality = true}));
     seconds_coloring = seconds_since(colouring_start);
-    solver.emplace(scene->model, colouring->colouring, settings, MPI_COMM_WORLD);
+    solver.emplace(scene->model, colouring->colouring, settings, MPI_COMM_WORLD,
+                   options.distributed == "block" ? DistributedMode::block : DistributedMode::exact);
     if (options.out && mpi.rank() == 0)
       output.emplace(*options.out, *scene, &colouring->colouring, options.write_obj);
   });
@@ -204,7 +205,7 @@ int run_distributed(const RunOptions& options, const std::function<RunSetup()>& 
   summary.add("colour_lower_bound", colour_lower_bound);
   summary.add("strategy", simulation.strategy);
   summary.add("mode", std::string(solver_mode_name(settings.mode)));
-  summary.add("distributed", std::string("exact"));
+  summary.add("distributed", *options.distributed);
   summary.add("ranks", mpi.size());
   summary.add("threads", local.threads);
   summary.add("frames", simulation.frames);

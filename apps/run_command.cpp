@@ -103,8 +103,9 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
   command->add_flag("--obj", options.write_obj, "with --out: also DIR/frame_NNNNN.obj");
   command->add_flag("--json", options.json, "print the summary as one JSON object");
   command->add_option("--distributed", options.distributed,
-                      "exact: split the run over the ranks mpirun starts (mpirun -np N tessera "
-                      "run ... --distributed exact); the same positions as one process");
+                      "exact or block: split the run over the ranks mpirun starts (mpirun -np N "
+                      "tessera run ... --distributed exact); exact gives the positions of one "
+                      "process, block exchanges once per iteration instead of once per colour");
   return command;
 }
 

@@ -21,6 +21,24 @@ MPI_Datatype real_type() { return std::is_same_v<Real, double> ? MPI_DOUBLE : MP
 
 constexpr std::uint32_t kNoSource = std::numeric_limits<std::uint32_t>::max();
 
+/// Every particle of constraint c (global id), static ones included.
+std::vector<ParticleIndex> constraint_particles(const Model& model, ConstraintIndex c) {
+  std::vector<ParticleIndex> members;
+  model.constraints.for_each([&](ConstraintFamily family, const auto& batch) {
+    if (batch.size() == 0) return;
+    const ConstraintIndex first = model.constraint_id(family, 0);
+    if (c < first || c >= first + batch.size()) return;
+    const std::size_t i = c - first;
+    if constexpr (requires { batch.particles; }) {
+      for (const auto& slot : batch.particles.particle) members.push_back(slot[i]);
+    } else {
+      for (std::size_t e = batch.offsets[i]; e < batch.offsets[i + 1]; ++e)
+        members.push_back(batch.particle[e]);
+    }
+  });
+  return members;
+}
+
 /// The particles of `held` (global ids, ascending) as a model of their own.
 ParticleState particles_held(const ParticleState& all, const std::vector<ParticleIndex>& held) {
   ParticleState part(held.size());
@@ -43,10 +61,13 @@ ParticleState particles_held(const ParticleState& all, const std::vector<Particl
 }  // namespace
 
 DistributedSolver::DistributedSolver(const Model& model, const Colouring& colouring,
-                                     SolverSettings settings, MPI_Comm communicator)
-    : communicator_(communicator), divergence_rms_(settings.divergence_rms) {
+                                     SolverSettings settings, MPI_Comm communicator,
+                                     DistributedMode mode)
+    : communicator_(communicator), mode_(mode), divergence_rms_(settings.divergence_rms) {
   if (settings.mode != SolverMode::gs)
-    throw InvalidInput(std::string("distributed exact mode: solver mode must be gs, not ") +
+    throw InvalidInput(std::string("distributed ") +
+                       (mode == DistributedMode::exact ? "exact" : "block") +
+                       " mode: solver mode must be gs, not " +
                        std::string(solver_mode_name(settings.mode)));
   MPI_Comm_rank(communicator_, &rank_);
   MPI_Comm_size(communicator_, &rank_count_);
@@ -108,6 +129,51 @@ DistributedSolver::DistributedSolver(const Model& model, const Colouring& colour
     }
   }
 
+  // Block mode's lists: who holds what besides its owner, and who moves it.
+  if (mode_ == DistributedMode::block) {
+    const auto movable = [&](ParticleIndex p) { return model.particles.inverse_mass[p] > 0; };
+    std::vector<std::vector<ParticleIndex>> to_owner(static_cast<std::size_t>(rank_count_));
+    for (const ParticleIndex p : mine.ghosts)
+      if (movable(p)) to_owner[plan.owner_of_particle[p]].push_back(p);
+    for (std::size_t r = 0; r < to_owner.size(); ++r) {
+      if (to_owner[r].empty()) continue;
+      Transfer& t = ghosts_by_owner_.emplace_back(Transfer{int(r), {}});
+      for (const ParticleIndex p : to_owner[r]) t.local.push_back(local_of(p));
+    }
+    // My owned particles other ranks hold, per holder; and which of them my constraints move.
+    std::vector<std::uint32_t> slot_of(held_.size(), kNoSource);
+    for (std::size_t s = 0; s < plan.ranks.size(); ++s) {
+      if (int(s) == rank_) continue;
+      Transfer group{int(s), {}};
+      std::vector<std::uint32_t> slots;
+      for (const ParticleIndex p : plan.ranks[s].ghosts) {
+        if (!movable(p) || plan.owner_of_particle[p] != Rank(rank_)) continue;
+        const std::uint32_t i = local_of(p);
+        if (slot_of[i] == kNoSource) {
+          slot_of[i] = std::uint32_t(shared_owned_.size());
+          shared_owned_.push_back(i);
+        }
+        group.local.push_back(i);
+        slots.push_back(slot_of[i]);
+      }
+      if (group.local.empty()) continue;
+      shared_by_holder_.push_back(std::move(group));
+      holder_slot_.push_back(std::move(slots));
+    }
+    std::vector<std::uint32_t> movers(shared_owned_.size(), 0);
+    for (const auto& slots : holder_slot_)
+      for (const std::uint32_t slot : slots) ++movers[slot];
+    std::vector<bool> moved_here(held_.size(), false);
+    for (const ConstraintIndex c : mine.constraints)
+      for (const ParticleIndex p : constraint_particles(model, c)) moved_here[local_of(p)] = true;
+    for (std::size_t slot = 0; slot < shared_owned_.size(); ++slot)
+      shared_weight_.push_back(Real(1) /
+                               Real(movers[slot] + (moved_here[shared_owned_[slot]] ? 1 : 0)));
+    for (const Transfer& t : ghosts_by_owner_)
+      remembered_.insert(remembered_.end(), t.local.begin(), t.local.end());
+    remembered_.insert(remembered_.end(), shared_owned_.begin(), shared_owned_.end());
+  }
+
   statistics_.ranks = std::size_t(rank_count_);
   statistics_.owned_particles = mine.owned.size();
   statistics_.ghost_particles = mine.ghosts.size();
@@ -122,6 +188,15 @@ DistributedSolver::DistributedSolver(const Model& model, const Colouring& colour
   solver_ = std::make_unique<Solver>(std::move(part), Colouring::from_colours(local_colour),
                                      settings);
   solver_->set_phase_hook([this](std::size_t phase, ParticleArrays particles) {
+    if (mode_ == DistributedMode::block) {
+      // One combination per iteration: after the last local colour (at the start for a rank
+      // without colours, whose corrections are all zero).
+      if (phase == Solver::kBeforePhases) remember_shared(particles);
+      if ((phase == Solver::kBeforePhases && phase_colour_.empty()) ||
+          (phase != Solver::kBeforePhases && phase + 1 == phase_colour_.size()))
+        combine_shared(particles);
+      return;
+    }
     const std::size_t first = phase == Solver::kBeforePhases ? 0 : phase_colour_[phase];
     const std::size_t next_phase = phase == Solver::kBeforePhases ? 0 : phase + 1;
     const std::size_t last =
@@ -142,7 +217,8 @@ void DistributedSolver::exchange(std::size_t first, std::size_t last, ParticleAr
     send_buffer_.resize(send_reals);
     receive_buffer_.resize(receive_reals);
     requests_.clear();
-    const int tag = int(k % 32768);  // MPI guarantees tags up to 32767; order is per pair
+    // MPI guarantees tags up to 32767 (block mode uses the last two); order is per pair.
+  const int tag = int(k % 32766);
     std::size_t offset = 0;
     for (const Transfer& t : receives) {
       requests_.emplace_back();
@@ -177,6 +253,99 @@ void DistributedSolver::exchange(std::size_t first, std::size_t last, ParticleAr
       offset += 3 * t.local.size();
     }
   }
+  statistics_.seconds_exchange +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void DistributedSolver::remember_shared(ParticleArrays particles) {
+  start_.resize(3 * remembered_.size());
+  for (std::size_t i = 0; i < remembered_.size(); ++i) {
+    start_[3 * i] = particles.x[remembered_[i]];
+    start_[3 * i + 1] = particles.y[remembered_[i]];
+    start_[3 * i + 2] = particles.z[remembered_[i]];
+  }
+}
+
+void DistributedSolver::send_and_receive(const std::vector<Transfer>& sends,
+                                         const std::vector<Real>& send_values,
+                                         const std::vector<Transfer>& receives, int tag) {
+  std::size_t receive_reals = 0;
+  for (const Transfer& t : receives) receive_reals += 3 * t.local.size();
+  receive_buffer_.resize(receive_reals);
+  requests_.clear();
+  std::size_t offset = 0;
+  for (const Transfer& t : receives) {
+    requests_.emplace_back();
+    MPI_Irecv(receive_buffer_.data() + offset, int(3 * t.local.size()), real_type(), t.rank, tag,
+              communicator_, &requests_.back());
+    offset += 3 * t.local.size();
+  }
+  offset = 0;
+  for (const Transfer& t : sends) {
+    requests_.emplace_back();
+    MPI_Isend(send_values.data() + offset, int(3 * t.local.size()), real_type(), t.rank, tag,
+              communicator_, &requests_.back());
+    offset += 3 * t.local.size();
+    ++statistics_.messages_sent;
+    statistics_.bytes_sent += 3 * t.local.size() * sizeof(Real);
+  }
+  MPI_Waitall(int(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
+}
+
+void DistributedSolver::combine_shared(ParticleArrays particles) {
+  const auto start = std::chrono::steady_clock::now();
+  constexpr int kCorrections = 32768 - 2, kMeans = 32768 - 1;  // beyond the colours' tags
+  // Round 1: my ghosts' corrections (position now − at the start) to their owners.
+  std::size_t at = 0;
+  send_buffer_.clear();
+  for (const Transfer& t : ghosts_by_owner_)
+    for (const std::uint32_t i : t.local) {
+      send_buffer_.push_back(particles.x[i] - start_[3 * at]);
+      send_buffer_.push_back(particles.y[i] - start_[3 * at + 1]);
+      send_buffer_.push_back(particles.z[i] - start_[3 * at + 2]);
+      ++at;
+    }
+  send_and_receive(ghosts_by_owner_, send_buffer_, shared_by_holder_, kCorrections);
+  // The owner's mean: its own correction first, then the holders' in rank order.
+  const std::size_t owned_start = at;
+  values_.assign(3 * shared_owned_.size(), Real(0));
+  for (std::size_t slot = 0; slot < shared_owned_.size(); ++slot) {
+    const std::uint32_t i = shared_owned_[slot];
+    values_[3 * slot] = particles.x[i] - start_[3 * (owned_start + slot)];
+    values_[3 * slot + 1] = particles.y[i] - start_[3 * (owned_start + slot) + 1];
+    values_[3 * slot + 2] = particles.z[i] - start_[3 * (owned_start + slot) + 2];
+  }
+  std::size_t offset = 0;
+  for (std::size_t g = 0; g < shared_by_holder_.size(); ++g)
+    for (const std::uint32_t slot : holder_slot_[g]) {
+      for (int k = 0; k < 3; ++k) values_[3 * slot + k] += receive_buffer_[offset + k];
+      offset += 3;
+    }
+  for (std::size_t slot = 0; slot < shared_owned_.size(); ++slot) {
+    const std::uint32_t i = shared_owned_[slot];
+    const Real w = shared_weight_[slot];
+    const std::size_t s = 3 * (owned_start + slot);
+    particles.x[i] = start_[s] + w * values_[3 * slot];
+    particles.y[i] = start_[s + 1] + w * values_[3 * slot + 1];
+    particles.z[i] = start_[s + 2] + w * values_[3 * slot + 2];
+  }
+  // Round 2: the results back to every holder.
+  send_buffer_.clear();
+  for (const Transfer& t : shared_by_holder_)
+    for (const std::uint32_t i : t.local) {
+      send_buffer_.push_back(particles.x[i]);
+      send_buffer_.push_back(particles.y[i]);
+      send_buffer_.push_back(particles.z[i]);
+    }
+  send_and_receive(shared_by_holder_, send_buffer_, ghosts_by_owner_, kMeans);
+  offset = 0;
+  for (const Transfer& t : ghosts_by_owner_)
+    for (const std::uint32_t i : t.local) {
+      particles.x[i] = receive_buffer_[offset];
+      particles.y[i] = receive_buffer_[offset + 1];
+      particles.z[i] = receive_buffer_[offset + 2];
+      offset += 3;
+    }
   statistics_.seconds_exchange +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }

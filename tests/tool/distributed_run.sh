@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# tessera run --distributed exact under mpirun, as a user runs it: 1, 2 and 3 ranks give the
+# tessera run --distributed exact|block under mpirun, as a user runs it: 1, 2 and 3 ranks give the
 # single-process state_hash on a cloth and an FEM bar; the summary names the ranks and what
 # they exchanged; --out writes one frame set; bad input ends every rank with one line on
 # stderr and exit code 2.
@@ -32,6 +32,18 @@ for scene in "cloth:24x20 --frames 5" "bar:2x2x6 --frames 5 --solid-material str
     fi
   done
 done
+
+# Block mode: one exchange per iteration instead of one per colour, residuals near exact's.
+exact=$("$mpiexec" -q --oversubscribe -np 2 "$tessera" run cloth:32 --frames 10 --threads 1 --distributed exact --json)
+block=$("$mpiexec" -q --oversubscribe -np 2 "$tessera" run cloth:32 --frames 10 --threads 1 --distributed block --json) \
+  || fail "block mode exited $?"
+[[ $(field distributed <<< "$block") == "block" ]] || fail "block: distributed is not block"
+/usr/bin/python3 - "$exact" "$block" <<'PY' || fail "block mode: messages or residuals out of line"
+import json, sys
+exact, block = json.loads(sys.argv[1]), json.loads(sys.argv[2])
+assert block["messages_per_iteration"] < exact["messages_per_iteration"] / 4, (block, exact)
+assert block["residual_rms_final"] < 2 * exact["residual_rms_final"], (block, exact)
+PY
 
 # One frame set, written by rank 0.
 "$mpiexec" -q --oversubscribe -np 2 "$tessera" run cloth:10x8 --frames 3 --threads 1 \

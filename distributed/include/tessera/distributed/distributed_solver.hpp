@@ -14,6 +14,15 @@
 // updates run on owned and ghost particles alike: the same arithmetic on the same values
 // gives the same bits, so ghosts need no exchange outside the colours.
 //
+// Block mode instead exchanges once per iteration: each rank sweeps all its colours on its own
+// (Gauss–Seidel inside its part), then a particle that several ranks' constraints moved gets
+// the mean of their corrections: the ghost holders send their corrections to the owner, which
+// adds them to its own in rank order and sends the result back (block Jacobi across the
+// ranks, additive Schwarz with one layer of overlap). Two rounds per iteration instead of one
+// per colour; deterministic for a given rank count, but not the same answer for every count
+// (one rank gives exact mode's answer). docs/distributed.md measures what it costs in
+// convergence.
+//
 // Collective: every rank constructs it with the same model, colouring and settings, and calls
 // step(), residual() and gather_positions() together.
 #pragma once
@@ -31,6 +40,9 @@
 #include <tessera/parallel/solver.hpp>
 
 namespace tessera {
+
+/// How the ranks meet: after every colour (exact) or after every iteration (block).
+enum class DistributedMode { exact, block };
 
 /// What one rank holds and how much it exchanged (over all steps so far).
 struct DistributedStatistics {
@@ -55,7 +67,7 @@ class DistributedSolver {
   /// divergence bound are applied collectively after each step (step() throws
   /// NumericalFailure on every rank when any rank has a non-finite position).
   DistributedSolver(const Model& model, const Colouring& colouring, SolverSettings settings,
-                    MPI_Comm communicator);
+                    MPI_Comm communicator, DistributedMode mode = DistributedMode::exact);
 
   /// One time step on every rank (collective).
   void step();
@@ -74,14 +86,24 @@ class DistributedSolver {
   const std::vector<ParticleIndex>& held_particles() const { return held_; }
 
  private:
-  /// The exchanges of global colours [first, last).
-  void exchange(std::size_t first, std::size_t last, ParticleArrays particles);
-
   struct Transfer {
     int rank;
     std::vector<std::uint32_t> local;  // local indices, in the plan's order
   };
+  /// The exchanges of global colours [first, last).
+  void exchange(std::size_t first, std::size_t last, ParticleArrays particles);
+  /// Block mode: the positions of the shared particles at the start of the iteration, and the
+  /// two rounds at its end (corrections to the owners, means back to the holders).
+  void remember_shared(ParticleArrays particles);
+  void combine_shared(ParticleArrays particles);
+  /// Posts the sends of `transfers` from `values` (3 reals per particle, in list order) and
+  /// the receives into receive_buffer_, and waits for all.
+  void send_and_receive(const std::vector<Transfer>& sends,
+                        const std::vector<Real>& send_values,
+                        const std::vector<Transfer>& receives, int tag);
+
   MPI_Comm communicator_;
+  DistributedMode mode_;
   int rank_ = 0, rank_count_ = 1;
   bool check_finite_ = true;
   Real divergence_rms_;
@@ -93,6 +115,16 @@ class DistributedSolver {
   std::vector<std::uint32_t> owned_local_;                 // this rank's owned, local indices
   std::unique_ptr<Solver> solver_;
   std::vector<Real> send_buffer_, receive_buffer_;
+  // Block mode: my movable ghosts by owner (corrections out, means in), my owned particles
+  // that others hold by holder (corrections in, means out; ascending holder rank), the owned
+  // shared particles' accumulator slots and 1 / (ranks that move them).
+  std::vector<Transfer> ghosts_by_owner_, shared_by_holder_;
+  std::vector<std::uint32_t> shared_owned_;                    // local indices
+  std::vector<std::vector<std::uint32_t>> holder_slot_;        // per holder group: accumulator slot
+  std::vector<Real> shared_weight_;                            // per slot
+  std::vector<std::uint32_t> remembered_;                      // local indices of all shared
+  std::vector<Real> start_;                                    // their positions, 3 per particle
+  std::vector<Real> values_;
   std::vector<MPI_Request> requests_;
   DistributedStatistics statistics_;
 };

@@ -154,6 +154,10 @@ int run_distributed(const RunOptions& options, const std::function<RunSetup()>& 
                    options.distributed == "block" ? DistributedMode::block : DistributedMode::exact);
     if (options.out && mpi.rank() == 0)
       output.emplace(*options.out, *scene, &colouring->colouring, options.write_obj);
+    if (mpi.rank() != 0) {  // the rank keeps its part only; rank 0 keeps the scene to report
+      scene.reset();
+      colouring.reset();
+    }
   });
   if (failure.code != 0) return end_with(mpi, failure);
 

@@ -20,6 +20,7 @@ namespace {
 MPI_Datatype real_type() { return std::is_same_v<Real, double> ? MPI_DOUBLE : MPI_FLOAT; }
 
 constexpr std::uint32_t kNoSource = std::numeric_limits<std::uint32_t>::max();
+constexpr std::size_t kNoColour = std::numeric_limits<std::size_t>::max();
 
 /// Every particle of constraint c (global id), static ones included.
 std::vector<ParticleIndex> constraint_particles(const Model& model, ConstraintIndex c) {
@@ -101,21 +102,8 @@ DistributedSolver::DistributedSolver(const Model& model, const Colouring& colour
                                 [&](std::size_t, std::size_t, ParticleIndex p) { return local_of(p); });
   });
 
-  // Local colours: the global colours this rank has constraints in, in order.
-  colour_count_ = colouring.colour_count();
-  std::vector<Colour> global_colour(mine.constraints.size());
-  for (std::size_t i = 0; i < mine.constraints.size(); ++i)
-    global_colour[i] = colouring.colour_of(mine.constraints[i]);
-  std::vector<Colour> present(global_colour);
-  std::sort(present.begin(), present.end());
-  present.erase(std::unique(present.begin(), present.end()), present.end());
-  phase_colour_.assign(present.begin(), present.end());
-  std::vector<Colour> local_colour(global_colour.size());
-  for (std::size_t i = 0; i < global_colour.size(); ++i)
-    local_colour[i] = Colour(std::lower_bound(present.begin(), present.end(), global_colour[i]) -
-                             present.begin());
-
   // The plan's transfers in local indices.
+  colour_count_ = colouring.colour_count();
   sends_.resize(colour_count_);
   receives_.resize(colour_count_);
   for (std::size_t k = 0; k < colour_count_; ++k) {
@@ -128,6 +116,43 @@ DistributedSolver::DistributedSolver(const Model& model, const Colouring& colour
       for (const ParticleIndex p : receive.particles) t.local.push_back(local_of(p));
     }
   }
+
+  // Local colours: per global colour this rank has constraints in, its boundary part (the
+  // constraints writing a particle the plan sends in that colour) then its interior part.
+  std::vector<std::uint64_t> sent;  // (colour << 32) | local particle
+  for (std::size_t k = 0; k < colour_count_; ++k)
+    for (const Transfer& t : sends_[k])
+      for (const std::uint32_t i : t.local) sent.push_back((std::uint64_t(k) << 32) | i);
+  std::sort(sent.begin(), sent.end());
+  std::vector<std::uint64_t> key(mine.constraints.size());  // (colour << 1) | interior
+  {
+    std::size_t local = 0;
+    part.constraints.for_each([&](ConstraintFamily, const auto& batch) {
+      for (std::size_t i = 0; i < batch.size(); ++i, ++local) {
+        const std::uint64_t colour = colouring.colour_of(mine.constraints[local]);
+        bool boundary = false;
+        const auto writes = [&](ParticleIndex p) {
+          boundary = boundary || std::binary_search(sent.begin(), sent.end(), (colour << 32) | p);
+        };
+        if constexpr (requires { batch.particles; }) {
+          for (const auto& slot : batch.particles.particle) writes(slot[i]);
+        } else {
+          for (std::size_t e = batch.offsets[i]; e < batch.offsets[i + 1]; ++e)
+            writes(batch.particle[e]);
+        }
+        key[local] = (colour << 1) | (boundary ? 0 : 1);
+      }
+    });
+  }
+  std::vector<std::uint64_t> present(key);
+  std::sort(present.begin(), present.end());
+  present.erase(std::unique(present.begin(), present.end()), present.end());
+  for (const std::uint64_t k : present) phases_.push_back({std::size_t(k >> 1), (k & 1) == 0});
+  std::vector<Colour> local_colour(key.size());
+  for (std::size_t i = 0; i < key.size(); ++i)
+    local_colour[i] =
+        Colour(std::lower_bound(present.begin(), present.end(), key[i]) - present.begin());
+  open_colour_ = kNoColour;
 
   // Block mode's lists: who holds what besides its owner, and who moves it.
   if (mode_ == DistributedMode::block) {
@@ -192,69 +217,96 @@ DistributedSolver::DistributedSolver(const Model& model, const Colouring& colour
       // One combination per iteration: after the last local colour (at the start for a rank
       // without colours, whose corrections are all zero).
       if (phase == Solver::kBeforePhases) remember_shared(particles);
-      if ((phase == Solver::kBeforePhases && phase_colour_.empty()) ||
-          (phase != Solver::kBeforePhases && phase + 1 == phase_colour_.size()))
+      if ((phase == Solver::kBeforePhases && phases_.empty()) ||
+          (phase != Solver::kBeforePhases && phase + 1 == phases_.size()))
         combine_shared(particles);
       return;
     }
-    const std::size_t first = phase == Solver::kBeforePhases ? 0 : phase_colour_[phase];
-    const std::size_t next_phase = phase == Solver::kBeforePhases ? 0 : phase + 1;
-    const std::size_t last =
-        next_phase < phase_colour_.size() ? phase_colour_[next_phase] : colour_count_;
-    exchange(first, last, particles);
+    exchange_after(phase, particles);
   });
 }
 
-void DistributedSolver::exchange(std::size_t first, std::size_t last, ParticleArrays particles) {
+void DistributedSolver::exchange_after(std::size_t phase, ParticleArrays particles) {
   const auto start = std::chrono::steady_clock::now();
-  for (std::size_t k = first; k < last; ++k) {
-    const auto& sends = sends_[k];
-    const auto& receives = receives_[k];
-    if (sends.empty() && receives.empty()) continue;
-    std::size_t send_reals = 0, receive_reals = 0;
-    for (const Transfer& t : sends) send_reals += 3 * t.local.size();
-    for (const Transfer& t : receives) receive_reals += 3 * t.local.size();
-    send_buffer_.resize(send_reals);
-    receive_buffer_.resize(receive_reals);
-    requests_.clear();
-    // MPI guarantees tags up to 32767 (block mode uses the last two); order is per pair.
-  const int tag = int(k % 32766);
-    std::size_t offset = 0;
-    for (const Transfer& t : receives) {
-      requests_.emplace_back();
-      MPI_Irecv(receive_buffer_.data() + offset, int(3 * t.local.size()), real_type(), t.rank,
-                tag, communicator_, &requests_.back());
-      offset += 3 * t.local.size();
+  std::size_t through = 0;  // the colours before this one are done
+  if (phase != Solver::kBeforePhases) {
+    const Phase& done = phases_[phase];
+    if (open_colour_ != done.colour) start_exchange(done.colour, particles);
+    const bool last_of_colour =
+        phase + 1 == phases_.size() || phases_[phase + 1].colour != done.colour;
+    if (!last_of_colour) {  // the interior part runs while the messages travel
+      statistics_.seconds_exchange +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      return;
     }
-    offset = 0;
-    for (const Transfer& t : sends) {
-      Real* out = send_buffer_.data() + offset;
-      for (std::size_t i = 0; i < t.local.size(); ++i) {
-        out[3 * i] = particles.x[t.local[i]];
-        out[3 * i + 1] = particles.y[t.local[i]];
-        out[3 * i + 2] = particles.z[t.local[i]];
-      }
-      requests_.emplace_back();
-      MPI_Isend(out, int(3 * t.local.size()), real_type(), t.rank, tag, communicator_,
-                &requests_.back());
-      offset += 3 * t.local.size();
-      ++statistics_.messages_sent;
-      statistics_.bytes_sent += 3 * t.local.size() * sizeof(Real);
-    }
-    MPI_Waitall(int(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
-    offset = 0;
-    for (const Transfer& t : receives) {
-      const Real* in = receive_buffer_.data() + offset;
-      for (std::size_t i = 0; i < t.local.size(); ++i) {
-        particles.x[t.local[i]] = in[3 * i];
-        particles.y[t.local[i]] = in[3 * i + 1];
-        particles.z[t.local[i]] = in[3 * i + 2];
-      }
-      offset += 3 * t.local.size();
-    }
+    finish_exchange(particles);
+    through = done.colour + 1;
+  }
+  // The colours this rank has nothing in, up to its next phase: receives only.
+  const std::size_t next_phase = phase == Solver::kBeforePhases ? 0 : phase + 1;
+  const std::size_t until =
+      next_phase < phases_.size() ? phases_[next_phase].colour : colour_count_;
+  for (std::size_t k = through; k < until; ++k) {
+    start_exchange(k, particles);
+    finish_exchange(particles);
   }
   statistics_.seconds_exchange +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void DistributedSolver::start_exchange(std::size_t k, ParticleArrays particles) {
+  open_colour_ = k;
+  requests_.clear();
+  const auto& sends = sends_[k];
+  const auto& receives = receives_[k];
+  if (sends.empty() && receives.empty()) return;
+  std::size_t send_reals = 0, receive_reals = 0;
+  for (const Transfer& t : sends) send_reals += 3 * t.local.size();
+  for (const Transfer& t : receives) receive_reals += 3 * t.local.size();
+  send_buffer_.resize(send_reals);
+  receive_buffer_.resize(receive_reals);
+  // MPI guarantees tags up to 32767 (block mode uses the last two); order is per pair.
+  const int tag = int(k % 32766);
+  std::size_t offset = 0;
+  for (const Transfer& t : receives) {
+    requests_.emplace_back();
+    MPI_Irecv(receive_buffer_.data() + offset, int(3 * t.local.size()), real_type(), t.rank, tag,
+              communicator_, &requests_.back());
+    offset += 3 * t.local.size();
+  }
+  offset = 0;
+  for (const Transfer& t : sends) {
+    Real* out = send_buffer_.data() + offset;
+    for (std::size_t i = 0; i < t.local.size(); ++i) {
+      out[3 * i] = particles.x[t.local[i]];
+      out[3 * i + 1] = particles.y[t.local[i]];
+      out[3 * i + 2] = particles.z[t.local[i]];
+    }
+    requests_.emplace_back();
+    MPI_Isend(out, int(3 * t.local.size()), real_type(), t.rank, tag, communicator_,
+              &requests_.back());
+    offset += 3 * t.local.size();
+    ++statistics_.messages_sent;
+    statistics_.bytes_sent += 3 * t.local.size() * sizeof(Real);
+  }
+}
+
+void DistributedSolver::finish_exchange(ParticleArrays particles) {
+  const std::size_t k = open_colour_;
+  open_colour_ = kNoColour;
+  if (requests_.empty()) return;
+  MPI_Waitall(int(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
+  requests_.clear();
+  std::size_t offset = 0;
+  for (const Transfer& t : receives_[k]) {
+    const Real* in = receive_buffer_.data() + offset;
+    for (std::size_t i = 0; i < t.local.size(); ++i) {
+      particles.x[t.local[i]] = in[3 * i];
+      particles.y[t.local[i]] = in[3 * i + 1];
+      particles.z[t.local[i]] = in[3 * i + 2];
+    }
+    offset += 3 * t.local.size();
+  }
 }
 
 void DistributedSolver::remember_shared(ParticleArrays particles) {

@@ -4,10 +4,15 @@
 // each colour the positions the decomposition's plan names. The final positions are bitwise
 // those of one process running the same colouring, for any number of ranks and threads.
 //
-//   rank r, every iteration:   exchange colours [0, g0)            (receives only)
-//                               project local colour 0 (= global g0), exchange [g0, g1)
-//                               project local colour 1 (= global g1), exchange [g1, g2)
-//                               ...                                  up to the last colour
+//   rank r, every iteration, for each global colour k in order:
+//     project k's boundary constraints (those writing a particle another rank holds)
+//     post k's receives and sends (non-blocking)
+//     project k's interior constraints while the messages travel
+//     wait, and copy the received positions in
+//
+// Each part is a colour of the rank's own Solver (a part of a colour is conflict-free too),
+// and the exchange runs from its phase hook. The interior cannot read what colour k brings:
+// a particle written in k by another rank's constraint is in no other constraint of k.
 //
 // A rank with no constraint of global colour k still takes part in k's exchange: it may
 // receive positions of its ghosts written in k. Time integration, λ resets and velocity
@@ -90,8 +95,11 @@ class DistributedSolver {
     int rank;
     std::vector<std::uint32_t> local;  // local indices, in the plan's order
   };
-  /// The exchanges of global colours [first, last).
-  void exchange(std::size_t first, std::size_t last, ParticleArrays particles);
+  /// Exact mode: posts colour k's receives and sends, and completes them.
+  void start_exchange(std::size_t k, ParticleArrays particles);
+  void finish_exchange(ParticleArrays particles);
+  /// The exchanges after local phase `phase` (or before the first: Solver::kBeforePhases).
+  void exchange_after(std::size_t phase, ParticleArrays particles);
   /// Block mode: the positions of the shared particles at the start of the iteration, and the
   /// two rounds at its end (corrections to the owners, means back to the holders).
   void remember_shared(ParticleArrays particles);
@@ -108,7 +116,12 @@ class DistributedSolver {
   bool check_finite_ = true;
   Real divergence_rms_;
   std::size_t colour_count_ = 0;
-  std::vector<std::size_t> phase_colour_;  // global colour of local phase j
+  struct Phase {
+    std::size_t colour;  // global colour
+    bool boundary;       // its constraints write particles other ranks hold
+  };
+  std::vector<Phase> phases_;             // the rank's Solver's colours, in order
+  std::size_t open_colour_;               // the colour whose exchange is in flight, or npos
   std::vector<std::vector<Transfer>> sends_, receives_;  // per global colour
   std::vector<ParticleIndex> held_;                       // local → global
   std::vector<std::vector<ParticleIndex>> owned_of_rank_;  // rank 0's gather map

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <iostream>
 #include <optional>
 #include <stdexcept>
@@ -19,6 +20,7 @@
 #include <tessera/coloring/run_colouring.hpp>
 #include <tessera/core/error.hpp>
 #include <tessera/core/fingerprint.hpp>
+#include <tessera/distributed/agreement.hpp>
 #include <tessera/distributed/distributed_solver.hpp>
 #include <tessera/io/scene_file.hpp>
 
@@ -60,40 +62,15 @@ class MpiSession {
   int rank_ = 0, size_ = 1;
 };
 
-/// What failed on a rank: an exit code (2 bad input, 1 anything else) and its message.
-struct Failure {
-  int code = 0;
-  std::string message;
-};
-
-/// Runs `work`, then agrees over every rank: if any failed, every rank learns the lowest
-/// failing rank's code and message (the ranks run the same code on the same input, so
-/// usually all fail alike).
+/// The work on every rank, then the agreement on what failed (agreement.hpp).
 template <class Work>
-Failure agreed(const MpiSession& mpi, Work&& work) {
-  Failure mine;
-  try {
-    work();
-  } catch (const InvalidInput& error) {
-    mine = {2, error.what()};
-  } catch (const std::exception& error) {
-    mine = {1, error.what()};
-  }
-  int failing = mine.code != 0 ? mpi.rank() : mpi.size();
-  int first = mpi.size();
-  MPI_Allreduce(&failing, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  if (first == mpi.size()) return {};
-  int header[2] = {mine.code, int(mine.message.size())};
-  MPI_Bcast(header, 2, MPI_INT, first, MPI_COMM_WORLD);
-  std::string message(std::size_t(header[1]), ' ');
-  if (mpi.rank() == first) message = mine.message;
-  MPI_Bcast(message.data(), header[1], MPI_CHAR, first, MPI_COMM_WORLD);
-  return {header[0], std::move(message)};
+RankFailure agreed(const MpiSession&, Work&& work) {
+  return run_agreed(MPI_COMM_WORLD, std::function<void()>(std::forward<Work>(work)));
 }
 
 /// Rank 0 prints the agreed failure; every rank returns its exit code once it has (mpirun
 /// stops the job when the first rank exits with an error, which must not be before the line).
-int end_with(const MpiSession& mpi, const Failure& failure) {
+int end_with(const MpiSession& mpi, const RankFailure& failure) {
   if (mpi.rank() == 0) print_error("run", failure.message);
   MPI_Barrier(MPI_COMM_WORLD);
   return failure.code;
@@ -126,7 +103,7 @@ int run_distributed(const RunOptions& options, const std::function<RunSetup()>& 
   std::optional<FrameOutput> output;
   std::size_t colour_lower_bound = 0;
   double seconds_coloring = 0;
-  Failure failure = agreed(mpi, [&] {
+  RankFailure failure = agreed(mpi, [&] {
     RunSetup chosen = setup();
     description = std::move(chosen.description);
     simulation = std::move(chosen.simulation);

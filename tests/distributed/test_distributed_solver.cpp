@@ -5,6 +5,7 @@
 // triangles, FEM and strain tetrahedra, volume, tethers), 1 and 2 threads per rank, and the
 // refusals every rank must agree on.
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include <tessera/coloring/run_colouring.hpp>
 #include <tessera/core/error.hpp>
 #include <tessera/core/fingerprint.hpp>
+#include <tessera/distributed/agreement.hpp>
 #include <tessera/distributed/distributed_solver.hpp>
 #include <tessera/io/scene_description.hpp>
 #include <tessera/io/scene_file.hpp>
@@ -198,6 +200,27 @@ TEST(DistributedBlock, OneRankIsExactAndEveryRankCountIsRepeatableAndConverges) 
     EXPECT_LT(residual.rms, 2 * single.rms + 1e-9);
     EXPECT_LT(residual.max, 2 * single.max + 1e-9);
   }
+}
+
+TEST(Agreement, AFailureOnOneRankEndsEveryRankWithTheLowestFailingRanksMessage) {
+  const int last = world_size() - 1;
+  // Bad input seen by the last rank alone: every rank learns it (and none waits forever).
+  const RankFailure alone = run_agreed(MPI_COMM_WORLD, [&] {
+    if (world_rank() == last) throw InvalidInput("rank " + std::to_string(last) + " saw bad input");
+  });
+  EXPECT_EQ(alone.code, 2);
+  EXPECT_EQ(alone.message, "rank " + std::to_string(last) + " saw bad input");
+  // Several fail: the lowest failing rank's failure wins; other exceptions give code 1.
+  const RankFailure many = run_agreed(MPI_COMM_WORLD, [&] {
+    if (world_rank() == last) throw std::runtime_error("numerical trouble on " + std::to_string(last));
+    if (world_rank() > 0 && world_rank() < last) throw InvalidInput("not this one");
+  });
+  EXPECT_EQ(many.code, world_size() > 2 ? 2 : 1);
+  EXPECT_EQ(many.message, world_size() > 2 ? std::string("not this one")
+                                           : "numerical trouble on " + std::to_string(last));
+  const RankFailure none = run_agreed(MPI_COMM_WORLD, [] {});
+  EXPECT_EQ(none.code, 0);
+  EXPECT_TRUE(none.message.empty());
 }
 
 TEST(DistributedExact, RefusalsAreTheSameOnEveryRank) {

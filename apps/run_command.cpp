@@ -225,6 +225,16 @@ int run_command(const RunOptions& options) {
     summary.add("residual_" + name + "_rms_final", family.rms);
     summary.add("residual_" + name + "_max_final", family.max);
   }
+  // Where the largest residual is, in the model's numbering (Model::constraint_id), so a user
+  // can look at the constraint that limits the run.
+  if (final.constraints != 0) {
+    const FamilyResidual& worst = final.of(final.worst_family);
+    summary.add("residual_worst", std::string(family_name(final.worst_family)) +
+                                      (worst.worst_is_contact    ? " contact "
+                                       : worst.worst_is_dynamic ? " dynamic constraint "
+                                                                : " constraint ") +
+                                      std::to_string(worst.worst));
+  }
   if (const CollisionStage* stage = solver.collisions()) {
     const CollisionStatistics& found = stage->statistics();
     const std::vector<Vector3r> positions = solver.positions();

@@ -145,6 +145,19 @@ TEST_F(Cli, RunSummaryHoldsEveryKey) {
       EXPECT_TRUE(summary.contains(key)) << key;
     }
   EXPECT_FALSE(summary.contains("residual_volume_rms_final")) << "only the scene's families";
+  // Where the largest residual is: a family of the scene and a constraint id it has.
+  const std::string worst = summary["residual_worst"].get<std::string>();
+  std::size_t id = 0;
+  bool named = false;
+  for (const char* family : {"distance", "dihedral", "tether"}) {
+    const std::string prefix = std::string(family) + " constraint ";
+    if (worst.rfind(prefix, 0) == 0) {
+      named = true;
+      id = std::stoul(worst.substr(prefix.size()));
+    }
+  }
+  EXPECT_TRUE(named) << worst;
+  EXPECT_LT(id, summary["constraints"].get<std::uint64_t>()) << worst;
   EXPECT_EQ(run_json({"run", "cloth:12x10", "--frames", "1", "--tethers", "none"})
                 .contains("residual_tether_rms_final"),
             false);

@@ -204,16 +204,7 @@ int run_distributed(const RunOptions& options, const std::function<RunSetup()>& 
   summary.add("ghost_particles", ghosts);
   summary.add("messages_per_iteration", sweeps > 0 ? double(messages) / sweeps : 0.0);
   summary.add("bytes_per_iteration", sweeps > 0 ? double(bytes) / sweeps : 0.0);
-  summary.add("residual_rms_initial", initial.rms);
-  summary.add("residual_rms_final", final.rms);
-  summary.add("residual_max_final", final.max);
-  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
-    const FamilyResidual& family = final.families[f];
-    if (family.constraints == 0) continue;
-    const std::string name(family_name(ConstraintFamily(f)));
-    summary.add("residual_" + name + "_rms_final", family.rms);
-    summary.add("residual_" + name + "_max_final", family.max);
-  }
+  add_residuals(summary, initial, final);
   summary.add("state_hash", state_hash(positions));
   if (output) {
     summary.add("output", output->folder().string());

@@ -215,16 +215,7 @@ int run_command(const RunOptions& options) {
   summary.add("projections", statistics.projections);
   summary.add("projections_per_second",
               statistics.seconds_projection > 0 ? double(statistics.projections) / statistics.seconds_projection : 0.0);
-  summary.add("residual_rms_initial", initial.rms);
-  summary.add("residual_rms_final", final.rms);
-  summary.add("residual_max_final", final.max);
-  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
-    const FamilyResidual& family = final.families[f];
-    if (family.constraints == 0) continue;
-    const std::string name(family_name(ConstraintFamily(f)));
-    summary.add("residual_" + name + "_rms_final", family.rms);
-    summary.add("residual_" + name + "_max_final", family.max);
-  }
+  add_residuals(summary, initial, final);
   // Where the largest residual is, in the model's numbering (Model::constraint_id), so a user
   // can look at the constraint that limits the run.
   if (final.constraints != 0) {

@@ -37,4 +37,17 @@ void Summary::print(std::ostream& out, bool as_json) const {
   out.flush();
 }
 
+void add_residuals(Summary& summary, const Residual& initial, const Residual& final) {
+  summary.add("residual_rms_initial", initial.rms);
+  summary.add("residual_rms_final", final.rms);
+  summary.add("residual_max_final", final.max);
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+    const FamilyResidual& family = final.families[f];
+    if (family.constraints == 0) continue;
+    const std::string name(family_name(ConstraintFamily(f)));
+    summary.add("residual_" + name + "_rms_final", family.rms);
+    summary.add("residual_" + name + "_max_final", family.max);
+  }
+}
+
 }  // namespace tessera::cli

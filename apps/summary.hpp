@@ -9,6 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <tessera/parallel/residual.hpp>
+
 namespace tessera::cli {
 
 class Summary {
@@ -31,5 +33,9 @@ class Summary {
  private:
   nlohmann::ordered_json json_ = nlohmann::ordered_json::object();
 };
+
+/// residual_rms_initial, residual_rms_final, residual_max_final, then the final RMS and max
+/// of every family the run has (residual_<family>_rms_final, ..._max_final).
+void add_residuals(Summary& summary, const Residual& initial, const Residual& final);
 
 }  // namespace tessera::cli

@@ -22,24 +22,6 @@ MPI_Datatype real_type() { return std::is_same_v<Real, double> ? MPI_DOUBLE : MP
 constexpr std::uint32_t kNoSource = std::numeric_limits<std::uint32_t>::max();
 constexpr std::size_t kNoColour = std::numeric_limits<std::size_t>::max();
 
-/// Every particle of constraint c (global id), static ones included.
-std::vector<ParticleIndex> constraint_particles(const Model& model, ConstraintIndex c) {
-  std::vector<ParticleIndex> members;
-  model.constraints.for_each([&](ConstraintFamily family, const auto& batch) {
-    if (batch.size() == 0) return;
-    const ConstraintIndex first = model.constraint_id(family, 0);
-    if (c < first || c >= first + batch.size()) return;
-    const std::size_t i = c - first;
-    if constexpr (requires { batch.particles; }) {
-      for (const auto& slot : batch.particles.particle) members.push_back(slot[i]);
-    } else {
-      for (std::size_t e = batch.offsets[i]; e < batch.offsets[i + 1]; ++e)
-        members.push_back(batch.particle[e]);
-    }
-  });
-  return members;
-}
-
 /// The particles of `held` (global ids, ascending) as a model of their own.
 ParticleState particles_held(const ParticleState& all, const std::vector<ParticleIndex>& held) {
   ParticleState part(held.size());
@@ -125,6 +107,7 @@ DistributedSolver::DistributedSolver(const Model& model, const Colouring& colour
       for (const std::uint32_t i : t.local) sent.push_back((std::uint64_t(k) << 32) | i);
   std::sort(sent.begin(), sent.end());
   std::vector<std::uint64_t> key(mine.constraints.size());  // (colour << 1) | interior
+  std::vector<bool> moved_here(held_.size(), false);         // by this rank's constraints
   {
     std::size_t local = 0;
     part.constraints.for_each([&](ConstraintFamily, const auto& batch) {
@@ -132,6 +115,7 @@ DistributedSolver::DistributedSolver(const Model& model, const Colouring& colour
         const std::uint64_t colour = colouring.colour_of(mine.constraints[local]);
         bool boundary = false;
         const auto writes = [&](ParticleIndex p) {
+          moved_here[p] = true;
           boundary = boundary || std::binary_search(sent.begin(), sent.end(), (colour << 32) | p);
         };
         if constexpr (requires { batch.particles; }) {
@@ -188,9 +172,6 @@ DistributedSolver::DistributedSolver(const Model& model, const Colouring& colour
     std::vector<std::uint32_t> movers(shared_owned_.size(), 0);
     for (const auto& slots : holder_slot_)
       for (const std::uint32_t slot : slots) ++movers[slot];
-    std::vector<bool> moved_here(held_.size(), false);
-    for (const ConstraintIndex c : mine.constraints)
-      for (const ParticleIndex p : constraint_particles(model, c)) moved_here[local_of(p)] = true;
     for (std::size_t slot = 0; slot < shared_owned_.size(); ++slot)
       shared_weight_.push_back(Real(1) /
                                Real(movers[slot] + (moved_here[shared_owned_[slot]] ? 1 : 0)));
@@ -260,35 +241,12 @@ void DistributedSolver::start_exchange(std::size_t k, ParticleArrays particles) 
   const auto& sends = sends_[k];
   const auto& receives = receives_[k];
   if (sends.empty() && receives.empty()) return;
-  std::size_t send_reals = 0, receive_reals = 0;
-  for (const Transfer& t : sends) send_reals += 3 * t.local.size();
-  for (const Transfer& t : receives) receive_reals += 3 * t.local.size();
-  send_buffer_.resize(send_reals);
-  receive_buffer_.resize(receive_reals);
+  send_buffer_.clear();
+  for (const Transfer& t : sends)
+    for (const std::uint32_t i : t.local)
+      send_buffer_.insert(send_buffer_.end(), {particles.x[i], particles.y[i], particles.z[i]});
   // MPI guarantees tags up to 32767 (block mode uses the last two); order is per pair.
-  const int tag = int(k % 32766);
-  std::size_t offset = 0;
-  for (const Transfer& t : receives) {
-    requests_.emplace_back();
-    MPI_Irecv(receive_buffer_.data() + offset, int(3 * t.local.size()), real_type(), t.rank, tag,
-              communicator_, &requests_.back());
-    offset += 3 * t.local.size();
-  }
-  offset = 0;
-  for (const Transfer& t : sends) {
-    Real* out = send_buffer_.data() + offset;
-    for (std::size_t i = 0; i < t.local.size(); ++i) {
-      out[3 * i] = particles.x[t.local[i]];
-      out[3 * i + 1] = particles.y[t.local[i]];
-      out[3 * i + 2] = particles.z[t.local[i]];
-    }
-    requests_.emplace_back();
-    MPI_Isend(out, int(3 * t.local.size()), real_type(), t.rank, tag, communicator_,
-              &requests_.back());
-    offset += 3 * t.local.size();
-    ++statistics_.messages_sent;
-    statistics_.bytes_sent += 3 * t.local.size() * sizeof(Real);
-  }
+  post(sends, send_buffer_, receives, int(k % 32766));
 }
 
 void DistributedSolver::finish_exchange(ParticleArrays particles) {
@@ -318,9 +276,9 @@ void DistributedSolver::remember_shared(ParticleArrays particles) {
   }
 }
 
-void DistributedSolver::send_and_receive(const std::vector<Transfer>& sends,
-                                         const std::vector<Real>& send_values,
-                                         const std::vector<Transfer>& receives, int tag) {
+void DistributedSolver::post(const std::vector<Transfer>& sends,
+                             const std::vector<Real>& send_values,
+                             const std::vector<Transfer>& receives, int tag) {
   std::size_t receive_reals = 0;
   for (const Transfer& t : receives) receive_reals += 3 * t.local.size();
   receive_buffer_.resize(receive_reals);
@@ -341,6 +299,12 @@ void DistributedSolver::send_and_receive(const std::vector<Transfer>& sends,
     ++statistics_.messages_sent;
     statistics_.bytes_sent += 3 * t.local.size() * sizeof(Real);
   }
+}
+
+void DistributedSolver::send_and_receive(const std::vector<Transfer>& sends,
+                                         const std::vector<Real>& send_values,
+                                         const std::vector<Transfer>& receives, int tag) {
+  post(sends, send_values, receives, tag);
   MPI_Waitall(int(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
 }
 

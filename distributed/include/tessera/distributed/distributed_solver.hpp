@@ -104,8 +104,10 @@ class DistributedSolver {
   /// two rounds at its end (corrections to the owners, means back to the holders).
   void remember_shared(ParticleArrays particles);
   void combine_shared(ParticleArrays particles);
-  /// Posts the sends of `transfers` from `values` (3 reals per particle, in list order) and
-  /// the receives into receive_buffer_, and waits for all.
+  /// Posts the sends of `sends` from `send_values` (3 reals per particle, in list order) and
+  /// the receives of `receives` into receive_buffer_ (requests_); send_and_receive also waits.
+  void post(const std::vector<Transfer>& sends, const std::vector<Real>& send_values,
+            const std::vector<Transfer>& receives, int tag);
   void send_and_receive(const std::vector<Transfer>& sends,
                         const std::vector<Real>& send_values,
                         const std::vector<Transfer>& receives, int tag);

@@ -1,5 +1,6 @@
 // Solver benchmarks: solver/<mode>/<scene>/threads:<T>, the throughput of whole projection
-// sweeps (items_per_second = constraint projections per second), and
+// sweeps (items_per_second = constraint projections per second);
+// solver_layout/<layout>/<scene>/threads:<T>, gs with each ParticleLayout side by side; and
 // solver_strategy/<strategy>/<scene>/threads:<T>, gs under each colouring strategy (with
 // "+locality" the locality pass, "metis@<k>" METIS parts of k particles), which is how the
 // strategies and METIS's part size were compared on solver throughput.
@@ -120,10 +121,12 @@ const TimedColouring& colouring(const std::string& scene_name, const std::string
 }
 
 void run_solver(benchmark::State& state, SolverMode mode, const std::string& scene_name,
-                const std::string& strategy) {
+                const std::string& strategy,
+                ParticleLayout layout = kDefaultParticleLayout) {
   const Model& model = scene(scene_name);
   SolverSettings settings;
   settings.mode = mode;
+  settings.particle_layout = layout;
   settings.threads = std::size_t(state.range(0));
   settings.iterations = 1;
   settings.substeps = 1;
@@ -225,6 +228,16 @@ void register_benchmarks() {
       b->Arg(1);
       if (mode != SolverMode::sequential)
         for (const int threads : scaling_thread_counts()) b->Arg(threads);
+    }
+  for (const ParticleLayout layout : {ParticleLayout::separate, ParticleLayout::interleaved})
+    for (const char* scene_name : scenes) {
+      const std::string name = "solver_layout/" + std::string(particle_layout_name(layout)) +
+                               "/" + scene_name;
+      auto* b = benchmark::RegisterBenchmark(
+          name.c_str(), [layout, scene_name](benchmark::State& state) {
+            run_solver(state, SolverMode::gs, scene_name, kDefaultStrategy, layout);
+          });
+      b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(1)->Arg(2);
     }
   for (const char* strategy : {"greedy", "greedy+locality", "stencil", "stencil+locality",
                                "dsatur", "random", "metis", "metis@1024", "metis@4096",

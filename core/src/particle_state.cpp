@@ -36,4 +36,23 @@ ParticleState::ParticleState(std::span<const Vector3r> positions,
   }
 }
 
+void interleave_particles(const ParticleState& state, Real* xyzw, std::size_t first,
+                          std::size_t last) {
+  for (std::size_t i = first; i < last; ++i) {
+    xyzw[4 * i] = state.x[i];
+    xyzw[4 * i + 1] = state.y[i];
+    xyzw[4 * i + 2] = state.z[i];
+    xyzw[4 * i + 3] = state.inverse_mass[i];
+  }
+}
+
+void deinterleave_positions(const Real* xyzw, ParticleState& state, std::size_t first,
+                            std::size_t last) {
+  for (std::size_t i = first; i < last; ++i) {
+    state.x[i] = xyzw[4 * i];
+    state.y[i] = xyzw[4 * i + 1];
+    state.z[i] = xyzw[4 * i + 2];
+  }
+}
+
 }  // namespace tessera

@@ -28,16 +28,18 @@ struct ConstraintStencil {
 };
 
 inline Vector3r position_of(const ParticleArrays& particles, ParticleIndex i) {
-  return Vector3r(particles.x[i], particles.y[i], particles.z[i]);
+  const std::size_t at = i * particles.stride;
+  return Vector3r(particles.x[at], particles.y[at], particles.z[at]);
 }
 
 /// Adds a correction to particle i when it is movable; a static particle is never written.
 inline void add_correction(const ParticleArrays& particles, ParticleIndex i, Real inverse_mass,
                     const Vector3r& correction) {
   if (!(inverse_mass > 0)) return;
-  particles.x[i] += correction.x();
-  particles.y[i] += correction.y();
-  particles.z[i] += correction.z();
+  const std::size_t at = i * particles.stride;
+  particles.x[at] += correction.x();
+  particles.y[at] += correction.y();
+  particles.z[at] += correction.z();
 }
 
 template <int N>
@@ -48,7 +50,7 @@ ConstraintStencil<N> gather_stencil(const ParticleArrays& particles,
     const ParticleIndex i = slots.particle[std::size_t(k)][c];
     stencil.index[k] = i;
     stencil.position[k] = position_of(particles, i);
-    stencil.inverse_mass[k] = particles.inverse_mass[i];
+    stencil.inverse_mass[k] = particles.inverse_mass[i * particles.stride];
   }
   return stencil;
 }

@@ -97,7 +97,7 @@ void ProjectShapeMatchingConstraints(ParticleArrays particles,
       const auto entry32 = hn::Min(hn::Add(first, k32), last_entry);
       const auto particle32 = hn::GatherIndex(d32, entry_particle, entry32);
       hn::StoreU(particle32, d32, reinterpret_cast<int32_t*>(scratch_index.data() + k * lanes));
-      const IndexLanes particle = widen(particle32);
+      const IndexLanes particle = element_offsets(particles, widen(particle32));
       const IndexLanes entry = widen(entry32);
       Real* row = scratch.data() + k * kScratchRows * lanes;
       const RealLanes x = hn::GatherIndex(d, particles.x, particle);
@@ -312,7 +312,8 @@ Real constraint_residual(const ParticleArrays& particles, const ShapeMatchingCon
   if (last <= first) return 0;
   using Point = HWY_NAMESPACE::Vec3<Real>;
   const auto position_at = [&](ParticleIndex i) -> Point {
-    return {particles.x[i], particles.y[i], particles.z[i]};
+    const std::size_t at = i * particles.stride;
+    return {particles.x[at], particles.y[at], particles.z[at]};
   };
   const auto rest_offset = [&](std::size_t e) -> Point {
     return {batch.rest_offset[0][e], batch.rest_offset[1][e], batch.rest_offset[2][e]};
@@ -391,7 +392,7 @@ void project_sequentially(ParticleArrays particles, const ShapeMatchingConstrain
       rest_offsets[k] =
           Vector3r(batch.rest_offset[0][e], batch.rest_offset[1][e], batch.rest_offset[2][e]);
       current[k] = detail::position_of(particles, i);
-      inverse_masses[k] = particles.inverse_mass[i];
+      inverse_masses[k] = particles.inverse_mass[i * particles.stride];
     }
     PositionBasedDynamics::solve_ShapeMatchingConstraint(rest_offsets, current, inverse_masses.data(), int(size),
                                        rest_centre, batch.stiffness[c], batch.allow_stretch,

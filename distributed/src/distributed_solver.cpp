@@ -244,7 +244,7 @@ void DistributedSolver::start_exchange(std::size_t k, ParticleArrays particles) 
   send_buffer_.clear();
   for (const Transfer& t : sends)
     for (const std::uint32_t i : t.local)
-      send_buffer_.insert(send_buffer_.end(), {particles.x[i], particles.y[i], particles.z[i]});
+      send_buffer_.insert(send_buffer_.end(), {particles.x[particles.at(i)], particles.y[particles.at(i)], particles.z[particles.at(i)]});
   // MPI guarantees tags up to 32767 (block mode uses the last two); order is per pair.
   post(sends, send_buffer_, receives, int(k % 32766));
 }
@@ -259,9 +259,9 @@ void DistributedSolver::finish_exchange(ParticleArrays particles) {
   for (const Transfer& t : receives_[k]) {
     const Real* in = receive_buffer_.data() + offset;
     for (std::size_t i = 0; i < t.local.size(); ++i) {
-      particles.x[t.local[i]] = in[3 * i];
-      particles.y[t.local[i]] = in[3 * i + 1];
-      particles.z[t.local[i]] = in[3 * i + 2];
+      particles.x[particles.at(t.local[i])] = in[3 * i];
+      particles.y[particles.at(t.local[i])] = in[3 * i + 1];
+      particles.z[particles.at(t.local[i])] = in[3 * i + 2];
     }
     offset += 3 * t.local.size();
   }
@@ -270,9 +270,9 @@ void DistributedSolver::finish_exchange(ParticleArrays particles) {
 void DistributedSolver::remember_shared(ParticleArrays particles) {
   start_.resize(3 * remembered_.size());
   for (std::size_t i = 0; i < remembered_.size(); ++i) {
-    start_[3 * i] = particles.x[remembered_[i]];
-    start_[3 * i + 1] = particles.y[remembered_[i]];
-    start_[3 * i + 2] = particles.z[remembered_[i]];
+    start_[3 * i] = particles.x[particles.at(remembered_[i])];
+    start_[3 * i + 1] = particles.y[particles.at(remembered_[i])];
+    start_[3 * i + 2] = particles.z[particles.at(remembered_[i])];
   }
 }
 
@@ -316,9 +316,9 @@ void DistributedSolver::combine_shared(ParticleArrays particles) {
   send_buffer_.clear();
   for (const Transfer& t : ghosts_by_owner_)
     for (const std::uint32_t i : t.local) {
-      send_buffer_.push_back(particles.x[i] - start_[3 * at]);
-      send_buffer_.push_back(particles.y[i] - start_[3 * at + 1]);
-      send_buffer_.push_back(particles.z[i] - start_[3 * at + 2]);
+      send_buffer_.push_back(particles.x[particles.at(i)] - start_[3 * at]);
+      send_buffer_.push_back(particles.y[particles.at(i)] - start_[3 * at + 1]);
+      send_buffer_.push_back(particles.z[particles.at(i)] - start_[3 * at + 2]);
       ++at;
     }
   send_and_receive(ghosts_by_owner_, send_buffer_, shared_by_holder_, kCorrections);
@@ -327,9 +327,9 @@ void DistributedSolver::combine_shared(ParticleArrays particles) {
   values_.assign(3 * shared_owned_.size(), Real(0));
   for (std::size_t slot = 0; slot < shared_owned_.size(); ++slot) {
     const std::uint32_t i = shared_owned_[slot];
-    values_[3 * slot] = particles.x[i] - start_[3 * (owned_start + slot)];
-    values_[3 * slot + 1] = particles.y[i] - start_[3 * (owned_start + slot) + 1];
-    values_[3 * slot + 2] = particles.z[i] - start_[3 * (owned_start + slot) + 2];
+    values_[3 * slot] = particles.x[particles.at(i)] - start_[3 * (owned_start + slot)];
+    values_[3 * slot + 1] = particles.y[particles.at(i)] - start_[3 * (owned_start + slot) + 1];
+    values_[3 * slot + 2] = particles.z[particles.at(i)] - start_[3 * (owned_start + slot) + 2];
   }
   std::size_t offset = 0;
   for (std::size_t g = 0; g < shared_by_holder_.size(); ++g)
@@ -341,25 +341,25 @@ void DistributedSolver::combine_shared(ParticleArrays particles) {
     const std::uint32_t i = shared_owned_[slot];
     const Real w = shared_weight_[slot];
     const std::size_t s = 3 * (owned_start + slot);
-    particles.x[i] = start_[s] + w * values_[3 * slot];
-    particles.y[i] = start_[s + 1] + w * values_[3 * slot + 1];
-    particles.z[i] = start_[s + 2] + w * values_[3 * slot + 2];
+    particles.x[particles.at(i)] = start_[s] + w * values_[3 * slot];
+    particles.y[particles.at(i)] = start_[s + 1] + w * values_[3 * slot + 1];
+    particles.z[particles.at(i)] = start_[s + 2] + w * values_[3 * slot + 2];
   }
   // Round 2: the results back to every holder.
   send_buffer_.clear();
   for (const Transfer& t : shared_by_holder_)
     for (const std::uint32_t i : t.local) {
-      send_buffer_.push_back(particles.x[i]);
-      send_buffer_.push_back(particles.y[i]);
-      send_buffer_.push_back(particles.z[i]);
+      send_buffer_.push_back(particles.x[particles.at(i)]);
+      send_buffer_.push_back(particles.y[particles.at(i)]);
+      send_buffer_.push_back(particles.z[particles.at(i)]);
     }
   send_and_receive(shared_by_holder_, send_buffer_, ghosts_by_owner_, kMeans);
   offset = 0;
   for (const Transfer& t : ghosts_by_owner_)
     for (const std::uint32_t i : t.local) {
-      particles.x[i] = receive_buffer_[offset];
-      particles.y[i] = receive_buffer_[offset + 1];
-      particles.z[i] = receive_buffer_[offset + 2];
+      particles.x[particles.at(i)] = receive_buffer_[offset];
+      particles.y[particles.at(i)] = receive_buffer_[offset + 1];
+      particles.z[particles.at(i)] = receive_buffer_[offset + 2];
       offset += 3;
     }
   statistics_.seconds_exchange +=

@@ -281,7 +281,7 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
                                                        : dynamic_work_;
   switch (stage.kind) {
     case StageKind::coloured_phase: {
-      const ParticleArrays particles = ParticleArrays::of(state_);
+      const ParticleArrays particles = sweep_arrays();
       parallel_chunks(blocks.size(), 1, [&](std::size_t first, std::size_t last) {
         for (std::size_t b = first; b < last; ++b)
           kProjectBlock[std::size_t(blocks[b].family)](particles, sets, blocks[b].begin,
@@ -299,7 +299,7 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
                               settings_.chebyshev && settings_.mode == SolverMode::jacobi &&
                                   stage.set == StageSet::jacobi);
     case StageKind::sequential_sweep: {
-      const ParticleArrays particles = ParticleArrays::of(state_);
+      const ParticleArrays particles = sweep_arrays();
       for (const ScheduleBlock& block : blocks)
         kProjectSequentially[std::size_t(block.family)](particles, sets, block.begin, block.end,
                                                         projection);
@@ -338,7 +338,7 @@ void Solver::jacobi_projection(JacobiSet& jacobi, JacobiWork& work,
       const ScheduleBlock& block = blocks[b];
       const std::size_t f = std::size_t(block.family);
       // Gather from the particles, store into this family's incidences.
-      ParticleArrays particles = ParticleArrays::of(state_);
+      ParticleArrays particles = sweep_arrays();
       particles.corrected_x = work.x.data() + jacobi.incidence_base[f];
       particles.corrected_y = work.y.data() + jacobi.incidence_base[f];
       particles.corrected_z = work.z.data() + jacobi.incidence_base[f];
@@ -376,11 +376,14 @@ void Solver::jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work, R
   Real* previous_x = chebyshev_previous_[0].data();
   Real* previous_y = chebyshev_previous_[1].data();
   Real* previous_z = chebyshev_previous_[2].data();
+  const ParticleArrays particles = sweep_arrays();
+  const std::size_t stride = particles.stride;
   const auto reduce = [&]<bool Keep, bool Extrapolate>(std::size_t first, std::size_t last) {
     for (std::size_t k = first; k < last; ++k) {
       const ParticleIndex p = jacobi.particles[k];
       const std::uint32_t begin = jacobi.particle_offsets[k], end = jacobi.particle_offsets[k + 1];
-      const Real x = state_.x[p], y = state_.y[p], z = state_.z[p];
+      const std::size_t at = p * stride;
+      const Real x = particles.x[at], y = particles.y[at], z = particles.z[at];
       Real dx = 0, dy = 0, dz = 0;
       for (std::uint32_t j = begin; j < end; ++j) {
         const std::uint32_t i = jacobi.particle_incidences[j];
@@ -400,9 +403,9 @@ void Solver::jacobi_reduction(const JacobiSet& jacobi, const JacobiWork& work, R
         previous_y[k] = y;
         previous_z[k] = z;
       }
-      state_.x[p] = qx;
-      state_.y[p] = qy;
-      state_.z[p] = qz;
+      particles.x[at] = qx;
+      particles.y[at] = qy;
+      particles.z[at] = qz;
     }
   };
   parallel_chunks(jacobi.particles.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
@@ -423,12 +426,12 @@ void Solver::iterate(const ProjectionSettings& projection, std::size_t iteration
     for (const Stage& stage : stages_) run_stage(stage, projection);
     return;
   }
-  phase_hook_(kBeforePhases, ParticleArrays::of(state_));
+  phase_hook_(kBeforePhases, sweep_arrays());
   std::size_t phase = 0;
   for (const Stage& stage : stages_) {
     run_stage(stage, projection);
     if (stage.kind == StageKind::coloured_phase && stage.set == StageSet::coloured)
-      phase_hook_(phase++, ParticleArrays::of(state_));
+      phase_hook_(phase++, sweep_arrays());
   }
 }
 
@@ -510,7 +513,11 @@ void Solver::project(std::size_t iterations, Real dt) {
   projection_dt_ = dt;
   const auto start = Clock::now();
   save_state();
-  for (std::size_t it = 0; it < iterations; ++it) iterate(projection, it + 1);
+  {
+    begin_sweeps();
+    const EndSweeps end_sweeps_on_exit{this};  // also when a phase hook throws
+    for (std::size_t it = 0; it < iterations; ++it) iterate(projection, it + 1);
+  }
   restore_if_not_finite("a projection");
   statistics_.seconds_projection += seconds_since(start);
   statistics_.projections +=
@@ -551,6 +558,28 @@ void Solver::integrate(Real h) {
       state_.z[i] += h * state_.velocity_z[i];
     }
   });
+}
+
+ParticleArrays Solver::sweep_arrays() {
+  if (!sweeping_) return ParticleArrays::of(state_);
+  return ParticleArrays::of_interleaved(interleaved_.data(), state_.size());
+}
+
+void Solver::begin_sweeps() {
+  if (settings_.particle_layout != ParticleLayout::interleaved) return;
+  interleaved_.resize(4 * state_.size());
+  parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
+    interleave_particles(state_, interleaved_.data(), first, last);
+  });
+  sweeping_ = true;
+}
+
+void Solver::end_sweeps() {
+  if (!sweeping_) return;
+  parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
+    deinterleave_positions(interleaved_.data(), state_, first, last);
+  });
+  sweeping_ = false;
 }
 
 void Solver::update_velocities(Real h) {
@@ -615,11 +644,15 @@ void Solver::step() {
     if (last && settings_.report_residuals) report_.residual_before = residual();
     if (last && settings_.record_convergence) report_.history.push_back(report_.residual_before);
     const auto projection_start = Clock::now();
-    for (std::size_t it = 0; it < settings_.iterations; ++it) {
-      iterate(projection, it + 1);
-      if (last && settings_.record_convergence) {
-        statistics_.seconds_projection += seconds_since(projection_start);
-        report_.history.push_back(residual());
+    {
+      begin_sweeps();
+      const EndSweeps end_sweeps_on_exit{this};  // also when a phase hook throws
+      for (std::size_t it = 0; it < settings_.iterations; ++it) {
+        iterate(projection, it + 1);
+        if (last && settings_.record_convergence) {
+          statistics_.seconds_projection += seconds_since(projection_start);
+          report_.history.push_back(residual());
+        }
       }
     }
     if (!(last && settings_.record_convergence))
@@ -652,7 +685,7 @@ Residual Solver::residual() {
       schedule_, dynamic_.constraints, contacts_.constraints,
       contact_colours_ ? contact_colours_->ranges : kNoRanges, kResidualChunk);
   std::vector<detail::ResidualPartial> partials(ranges.size());
-  const ParticleArrays particles = ParticleArrays::of(state_);
+  const ParticleArrays particles = sweep_arrays();
   // XPBD: the residual of the equations the last projections solved, C + α̃λ at their dt.
   const Real compliance_dt =
       settings_.semantics == ConstraintSemantics::compliance ? projection_dt_ : Real(0);

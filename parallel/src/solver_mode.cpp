@@ -66,4 +66,17 @@ ContactScheduling parse_contact_scheduling(std::string_view name) {
   return parse_named(name, kSchedulings, contact_scheduling_name, "contact scheduling");
 }
 
+std::string_view particle_layout_name(ParticleLayout layout) {
+  switch (layout) {
+    case ParticleLayout::separate: return "separate";
+    case ParticleLayout::interleaved: return "interleaved";
+  }
+  return "unknown";
+}
+
+ParticleLayout parse_particle_layout(std::string_view name) {
+  constexpr ParticleLayout kLayouts[] = {ParticleLayout::separate, ParticleLayout::interleaved};
+  return parse_named(name, kLayouts, particle_layout_name, "particle layout");
+}
+
 }  // namespace tessera

@@ -1,8 +1,19 @@
-// Gather and scatter between the SoA particle arrays and W lanes of one constraint slot.
+// Gather and scatter between the particle arrays and W lanes of one constraint slot.
 //
 //   particle[slot][i .. i+W)  ──load──►  index lanes  ──gather──►  x, y, z, w lanes
 //   formula (lane_math / projection)  ──►  correction lanes
-//   for each active lane with w > 0:  x[index] = x + Δx  (scalar stores)
+//   for each active lane with w > 0:  x[index] = x + Δx
+//
+// Two layouts (ParticleArrays): separate arrays are read with one hardware gather per
+// coordinate (four cache lines per particle); interleaved particles (x y z w in 16 bytes)
+// are read with one 128-bit load per lane and transposed in registers:
+//
+//   lane:   0  1  2  3  4 …                 quad m holds lanes m, m+4, m+8, m+12:
+//   load:  [x y z w] per lane ─► q0 = [L0 |L4 |L8 |L12]   q1 = [L1 |L5 |L9 |L13] …
+//   unpack lo/hi (q0,q1), (q2,q3), then shuffle halves ─► X = [x0 x1 … x15], Y, Z, W
+//
+// and written back by the inverse transpose, one 128-bit store per movable lane. On Zen 4,
+// whose AVX-512 gathers and scatters are slow, this is what the sweep's speed rests on.
 //
 // The scatter is masked: a static particle (w = 0) may appear in several lanes or threads at
 // once, and it must never be written, not even with its own value. AVX-512 has a masked
@@ -17,6 +28,7 @@
 #endif
 
 #include <cstdint>
+#include <utility>
 
 #include <tessera/core/constraint_batch.hpp>
 #include <tessera/core/particle_state.hpp>
@@ -45,15 +57,67 @@ HWY_INLINE IndexLanes load_particle_indices(const ParticleIndex* indices) {
 #endif
 }
 
+/// Particle indices scaled to element offsets in either layout (ParticleArrays::stride).
+HWY_INLINE IndexLanes element_offsets(const ParticleArrays& particles, IndexLanes index) {
+  return particles.interleaved() ? hn::ShiftLeft<2>(index) : index;
+}
+
 /// One slot's particles for W lanes: where they are, and how heavy.
 struct ParticleLanes {
   Vec3<RealLanes> position;
   RealLanes inverse_mass;
 };
 
+#if HWY_TARGET == HWY_AVX3 && !TESSERA_DOUBLE_PRECISION
+/// Lanes m, m+4, m+8, m+12's particles, one per 128-bit block.
+template <int M>
+HWY_INLINE __m512 load_particle_quad(const Real* xyzw, const ParticleIndex* indices) {
+  __m512 q = _mm512_castps128_ps512(_mm_load_ps(xyzw + 4 * std::size_t(indices[M])));
+  q = _mm512_insertf32x4(q, _mm_load_ps(xyzw + 4 * std::size_t(indices[M + 4])), 1);
+  q = _mm512_insertf32x4(q, _mm_load_ps(xyzw + 4 * std::size_t(indices[M + 8])), 2);
+  return _mm512_insertf32x4(q, _mm_load_ps(xyzw + 4 * std::size_t(indices[M + 12])), 3);
+}
+#elif HWY_TARGET == HWY_AVX2 && !TESSERA_DOUBLE_PRECISION
+/// Lanes m and m+4's particles, one per 128-bit block.
+template <int M>
+HWY_INLINE __m256 load_particle_quad(const Real* xyzw, const ParticleIndex* indices) {
+  const __m256 q = _mm256_castps128_ps256(_mm_load_ps(xyzw + 4 * std::size_t(indices[M])));
+  return _mm256_insertf128_ps(q, _mm_load_ps(xyzw + 4 * std::size_t(indices[M + 4])), 1);
+}
+#endif
+
+/// The interleaved layout's gather (see the top of this file).
+HWY_INLINE ParticleLanes gather_interleaved(const Real* xyzw, const ParticleIndex* indices) {
+  const RealTag d;
+#if HWY_TARGET == HWY_AVX3 && !TESSERA_DOUBLE_PRECISION
+  const __m512 q0 = load_particle_quad<0>(xyzw, indices), q1 = load_particle_quad<1>(xyzw, indices);
+  const __m512 q2 = load_particle_quad<2>(xyzw, indices), q3 = load_particle_quad<3>(xyzw, indices);
+  const __m512 t0 = _mm512_unpacklo_ps(q0, q1), t1 = _mm512_unpackhi_ps(q0, q1);
+  const __m512 t2 = _mm512_unpacklo_ps(q2, q3), t3 = _mm512_unpackhi_ps(q2, q3);
+  return {{RealLanes{_mm512_shuffle_ps(t0, t2, 0x44)}, RealLanes{_mm512_shuffle_ps(t0, t2, 0xEE)},
+           RealLanes{_mm512_shuffle_ps(t1, t3, 0x44)}},
+          RealLanes{_mm512_shuffle_ps(t1, t3, 0xEE)}};
+#elif HWY_TARGET == HWY_AVX2 && !TESSERA_DOUBLE_PRECISION
+  const __m256 q0 = load_particle_quad<0>(xyzw, indices), q1 = load_particle_quad<1>(xyzw, indices);
+  const __m256 q2 = load_particle_quad<2>(xyzw, indices), q3 = load_particle_quad<3>(xyzw, indices);
+  const __m256 t0 = _mm256_unpacklo_ps(q0, q1), t1 = _mm256_unpackhi_ps(q0, q1);
+  const __m256 t2 = _mm256_unpacklo_ps(q2, q3), t3 = _mm256_unpackhi_ps(q2, q3);
+  return {{RealLanes{_mm256_shuffle_ps(t0, t2, 0x44)}, RealLanes{_mm256_shuffle_ps(t0, t2, 0xEE)},
+           RealLanes{_mm256_shuffle_ps(t1, t3, 0x44)}},
+          RealLanes{_mm256_shuffle_ps(t1, t3, 0xEE)}};
+#else
+  // Other targets and double: four gathers with the index scaled to the particle's 4 values.
+  const IndexLanes index = hn::ShiftLeft<2>(load_particle_indices(indices));
+  return {{hn::GatherIndex(d, xyzw, index), hn::GatherIndex(d, xyzw + 1, index),
+           hn::GatherIndex(d, xyzw + 2, index)},
+          hn::GatherIndex(d, xyzw + 3, index)};
+#endif
+}
+
 HWY_INLINE ParticleLanes gather_particles(const ParticleArrays& particles,
                                           const ParticleIndex* indices) {
   const RealTag d;
+  if (particles.interleaved()) return gather_interleaved(particles.x, indices);
   const IndexLanes index = load_particle_indices(indices);
   return {{hn::GatherIndex(d, particles.x, index), hn::GatherIndex(d, particles.y, index),
            hn::GatherIndex(d, particles.z, index)},
@@ -70,6 +134,69 @@ HWY_INLINE std::uint64_t mask_bits(const LaneMask& mask) {
   return bits;
 }
 
+#if (HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX2) && !TESSERA_DOUBLE_PRECISION
+/// Stores lane L = 4k + m (block k of quad m) when bit L of `bits` is set.
+template <int L, class Quad>
+HWY_INLINE void store_particle_lane(Real* xyzw, const ParticleIndex* indices,
+                                    const Quad (&quad)[4], std::uint32_t bits) {
+  if (!((bits >> L) & 1u)) return;
+  Real* to = xyzw + 4 * std::size_t(indices[L]);
+#if HWY_TARGET == HWY_AVX3
+  _mm_store_ps(to, _mm512_extractf32x4_ps(quad[L % 4], L / 4));
+#else
+  _mm_store_ps(to, _mm256_extractf128_ps(quad[L % 4], L / 4));
+#endif
+}
+
+template <class Quad, int... L>
+HWY_INLINE void store_particle_lanes(Real* xyzw, const ParticleIndex* indices,
+                                     const Quad (&quad)[4], std::uint32_t bits,
+                                     std::integer_sequence<int, L...>) {
+  (store_particle_lane<L>(xyzw, indices, quad, bits), ...);
+}
+#endif
+
+/// The interleaved layout's scatter: the inverse transpose, one whole-particle store per lane
+/// of `write` (w is stored back unchanged).
+HWY_INLINE void scatter_interleaved(Real* xyzw, const ParticleIndex* indices, RealLanes x,
+                                    RealLanes y, RealLanes z, RealLanes w,
+                                    const LaneMask& write) {
+#if HWY_TARGET == HWY_AVX3 && !TESSERA_DOUBLE_PRECISION
+  const std::uint32_t bits = std::uint32_t(write.raw);
+  if (bits == 0) return;
+  const __m512 t0 = _mm512_unpacklo_ps(x.raw, y.raw), t1 = _mm512_unpackhi_ps(x.raw, y.raw);
+  const __m512 t2 = _mm512_unpacklo_ps(z.raw, w.raw), t3 = _mm512_unpackhi_ps(z.raw, w.raw);
+  const __m512 quad[4] = {_mm512_shuffle_ps(t0, t2, 0x44), _mm512_shuffle_ps(t0, t2, 0xEE),
+                          _mm512_shuffle_ps(t1, t3, 0x44), _mm512_shuffle_ps(t1, t3, 0xEE)};
+  store_particle_lanes(xyzw, indices, quad, bits, std::make_integer_sequence<int, 16>());
+#elif HWY_TARGET == HWY_AVX2 && !TESSERA_DOUBLE_PRECISION
+  const std::uint32_t bits = std::uint32_t(mask_bits(write));
+  if (bits == 0) return;
+  const __m256 t0 = _mm256_unpacklo_ps(x.raw, y.raw), t1 = _mm256_unpackhi_ps(x.raw, y.raw);
+  const __m256 t2 = _mm256_unpacklo_ps(z.raw, w.raw), t3 = _mm256_unpackhi_ps(z.raw, w.raw);
+  const __m256 quad[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
+                          _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
+  store_particle_lanes(xyzw, indices, quad, bits, std::make_integer_sequence<int, 8>());
+#else
+  (void)w;
+  const RealTag d;
+  std::uint64_t bits = mask_bits(write);
+  if (bits == 0) return;
+  HWY_ALIGN Real x_lanes[kMaxLanes], y_lanes[kMaxLanes], z_lanes[kMaxLanes];
+  hn::Store(x, d, x_lanes);
+  hn::Store(y, d, y_lanes);
+  hn::Store(z, d, z_lanes);
+  while (bits != 0) {
+    const int lane = __builtin_ctzll(bits);
+    Real* to = xyzw + 4 * std::size_t(indices[lane]);
+    to[0] = x_lanes[lane];
+    to[1] = y_lanes[lane];
+    to[2] = z_lanes[lane];
+    bits &= bits - 1;
+  }
+#endif
+}
+
 /// x[index] = position + correction for the active lanes whose particle is movable.
 /// On AVX-512 this is a masked hardware scatter (measured 8 % faster than the scalar loop on
 /// a two-particle kernel); the intrinsics stay here, in the one place that scatters.
@@ -81,6 +208,8 @@ HWY_INLINE void scatter_corrected(ParticleArrays& particles, const ParticleIndex
   const RealLanes x = lanes.position.x + correction.x;
   const RealLanes y = lanes.position.y + correction.y;
   const RealLanes z = lanes.position.z + correction.z;
+  if (particles.interleaved())
+    return scatter_interleaved(particles.x, indices, x, y, z, lanes.inverse_mass, write);
 #if HWY_TARGET == HWY_AVX3 && TESSERA_DOUBLE_PRECISION
   const __m256i index = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(indices));
   _mm512_mask_i32scatter_pd(particles.x, write.raw, index, x.raw, 8);

@@ -29,6 +29,10 @@ HWY_INLINE void gather_positions(const ParticleArrays& particles,
                                  Vec3<RealLanes> (&p)[N]) {
   const RealTag d;
   for (int k = 0; k < N; ++k) {
+    if (particles.interleaved()) {
+      p[k] = gather_interleaved(particles.x, slot[k] + i).position;
+      continue;
+    }
     const IndexLanes index = load_particle_indices(slot[k] + i);
     p[k] = {hn::GatherIndex(d, particles.x, index), hn::GatherIndex(d, particles.y, index),
             hn::GatherIndex(d, particles.z, index)};

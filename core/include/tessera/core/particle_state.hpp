@@ -51,8 +51,18 @@ class ParticleState {
   std::size_t count_ = 0;
 };
 
-/// What a batched kernel reads and writes of the particles: raw SoA pointers, so kernels
-/// stay free of container types. The arrays hold at least `count` particles.
+/// What a batched kernel reads and writes of the particles: raw pointers, so kernels stay
+/// free of container types. The arrays hold at least `count` particles. Particle i's
+/// coordinates and inverse mass are x[i·stride], y[i·stride], z[i·stride] and
+/// inverse_mass[i·stride], in one of two layouts:
+///
+///   stride 1, separate arrays (ParticleState's own):  x x x …  y y y …  z z z …  w w w …
+///   stride 4, interleaved (of_interleaved):           x y z w  x y z w  x y z w  …
+///
+/// The interleaved layout puts a particle in 16 bytes (float; 32 in double) of one cache
+/// line, so a kernel loads it with one vector load and transposes in registers instead of
+/// four hardware gathers touching four lines (batch-inl.h). The solver sweeps in it
+/// (SolverSettings::particle_layout) and keeps ParticleState separate.
 struct ParticleArrays {
   Real* x;
   Real* y;
@@ -69,12 +79,32 @@ struct ParticleArrays {
   Real* corrected_y = nullptr;
   Real* corrected_z = nullptr;
   std::size_t corrected_stride = 0;
+  /// 1 (separate arrays) or 4 (interleaved: y = x + 1, z = x + 2, inverse_mass = x + 3).
+  std::size_t stride = 1;
+
+  bool interleaved() const { return stride != 1; }
+  /// Where particle i's values are in x, y, z and inverse_mass.
+  std::size_t at(std::size_t i) const { return i * stride; }
 
   static ParticleArrays of(ParticleState& state) {
     return {state.x.data(), state.y.data(), state.z.data(), state.inverse_mass.data(),
             state.size()};
   }
+  /// n particles stored x, y, z, w at xyzw[4i .. 4i + 4); xyzw is 16-byte aligned (32 in
+  /// double) and holds 4n values.
+  static ParticleArrays of_interleaved(Real* xyzw, std::size_t n) {
+    ParticleArrays arrays{xyzw, xyzw + 1, xyzw + 2, xyzw + 3, n};
+    arrays.stride = 4;
+    return arrays;
+  }
 };
+
+/// Copies positions and inverse masses of particles [first, last) from a state into the
+/// interleaved array xyzw (4 values per particle), and back (positions only).
+void interleave_particles(const ParticleState& state, Real* xyzw, std::size_t first,
+                          std::size_t last);
+void deinterleave_positions(const Real* xyzw, ParticleState& state, std::size_t first,
+                            std::size_t last);
 
 /// The velocity arrays of a state, in the form the velocity passes of the contact families
 /// read and write (x, y, z are the velocity components; inverse masses as for positions).

@@ -69,6 +69,8 @@ inline constexpr std::size_t kDefaultChebyshevDelay = 2;
 /// 0.35 for 2 % less stepping, 15,502 of 1.6 million contacts overflowing into the Jacobi
 /// set.
 inline constexpr ContactScheduling kDefaultContactScheduling = ContactScheduling::coloured;
+/// The sweeps' particle layout (measured: docs/performance.md, "Interleaved particles").
+inline constexpr ParticleLayout kDefaultParticleLayout = ParticleLayout::interleaved;
 
 struct SolverSettings {
   SolverMode mode = SolverMode::gs;
@@ -153,6 +155,8 @@ struct SolverSettings {
   /// Modes gs and hybrid: how the collision stage's contacts are scheduled each substep
   /// (solver_mode.hpp); see kDefaultContactScheduling for the measurement.
   ContactScheduling contact_scheduling = kDefaultContactScheduling;
+  /// How the sweeps hold the particles (solver_mode.hpp); the same bits either way.
+  ParticleLayout particle_layout = kDefaultParticleLayout;
 };
 
 /// What the last step() measured.
@@ -299,6 +303,17 @@ class Solver {
   bool guards_divergence() const;
   void restore_saved_state();
   void integrate(Real h);
+  /// The particles as the sweeps see them: the interleaved copy between begin_sweeps() and
+  /// end_sweeps() (ParticleLayout::interleaved), else the state's arrays.
+  ParticleArrays sweep_arrays();
+  /// Copy the state into the sweeps' layout before a solve's first iteration, and the
+  /// positions back after its last (nothing for ParticleLayout::separate).
+  void begin_sweeps();
+  void end_sweeps();
+  struct EndSweeps {
+    Solver* solver;
+    ~EndSweeps() { solver->end_sweeps(); }
+  };
   /// The collision stage's contacts for the substep of length h just predicted.
   void detect_contacts(Real h);
   /// A set swept after the schedule's (dynamic constraints, contacts): a Jacobi set built
@@ -337,6 +352,9 @@ class Solver {
   SolverSettings settings_;
   Schedule schedule_;
   ParticleState state_;
+  /// ParticleLayout::interleaved: x, y, z, w per particle while sweeping (sweeping_).
+  AlignedVector<Real> interleaved_;
+  bool sweeping_ = false;
   /// The schedule's Jacobi set's work, and the dynamic constraints' set (mode sequential:
   /// the constraints as given and one block per family, swept in order) and work.
   JacobiWork jacobi_work_;

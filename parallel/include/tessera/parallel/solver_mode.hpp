@@ -61,6 +61,22 @@ std::string_view contact_scheduling_name(ContactScheduling scheduling);
 /// The scheduling of that name; throws InvalidInput listing the names for any other.
 ContactScheduling parse_contact_scheduling(std::string_view name);
 
+/// How the solver holds the particles while it sweeps (ParticleArrays): the sweeps of a step
+/// or a project() call read and write a copy of x, y, z and the inverse mass, made before the
+/// first iteration and copied back after the last; the result is bitwise the same either way.
+enum class ParticleLayout : std::uint8_t {
+  /// The state's own arrays, one per coordinate: a particle costs a gather per coordinate.
+  separate,
+  /// x, y, z, w in 16 bytes (32 in double) per particle: one 128-bit load per particle and
+  /// lane, transposed in registers (batch-inl.h). See kDefaultParticleLayout.
+  interleaved,
+};
+
+/// "separate", "interleaved".
+std::string_view particle_layout_name(ParticleLayout layout);
+/// The layout of that name; throws InvalidInput listing the names for any other.
+ParticleLayout parse_particle_layout(std::string_view name);
+
 /// Every mode, in declaration order.
 inline constexpr SolverMode kSolverModes[] = {SolverMode::gs, SolverMode::jacobi,
                                               SolverMode::hybrid, SolverMode::sequential};

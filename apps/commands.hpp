@@ -19,7 +19,7 @@ struct RunOptions {
   std::optional<std::size_t> frames, substeps, iterations, threads;
   std::optional<double> time_step, velocity_damping, divergence_rms, chebyshev_rho;
   std::optional<std::string> strategy, mode, sequential_order, out, chebyshev, contact_scheduling;
-  std::optional<std::string> distributed;
+  std::optional<std::string> distributed, particle_layout;
   bool write_obj = false;
   bool balance = false;
   bool json = false;

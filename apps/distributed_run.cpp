@@ -186,6 +186,7 @@ int run_distributed(const RunOptions& options, const std::function<RunSetup()>& 
   summary.add("colour_lower_bound", colour_lower_bound);
   summary.add("strategy", simulation.strategy);
   summary.add("mode", std::string(solver_mode_name(settings.mode)));
+  summary.add("particle_layout", std::string(particle_layout_name(settings.particle_layout)));
   summary.add("distributed", *options.distributed);
   summary.add("ranks", mpi.size());
   summary.add("threads", local.threads);

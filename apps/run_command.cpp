@@ -86,6 +86,9 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
   command->add_option("--contact-scheduling", options.contact_scheduling,
                       "modes gs and hybrid: jacobi (the contacts as one Jacobi set) or coloured "
                       "(first-fit, swept Gauss-Seidel after the model's constraints) (default coloured)");
+  command->add_option("--particle-layout", options.particle_layout,
+                      "how the sweeps hold the particles: interleaved (x, y, z, w per particle, "
+                      "default) or separate (an array per coordinate); the same results");
   command->add_option("--divergence-rms", options.divergence_rms,
                       "a step that ends with an RMS residual above this fails (default 10; inf "
                       "turns the check off)")
@@ -119,6 +122,8 @@ int run_command(const RunOptions& options) {
       setup.description = describe_scene(options.scene);
       setup.simulation = simulation_of(setup.description, options);
       setup.settings = solver_settings(setup.simulation);
+      if (options.particle_layout)
+        setup.settings.particle_layout = parse_particle_layout(*options.particle_layout);
       return setup;
     });
 #else
@@ -131,7 +136,9 @@ int run_command(const RunOptions& options) {
   const io::SceneDescription description = describe_scene(options.scene);
   const io::SimulationSettings simulation = simulation_of(description, options);
   // Names are checked before the (possibly large) scene is built.
-  const SolverSettings settings = solver_settings(simulation);
+  SolverSettings settings = solver_settings(simulation);
+  if (options.particle_layout)
+    settings.particle_layout = parse_particle_layout(*options.particle_layout);
   const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   const ColouringStrategy& strategy = registry.get(simulation.strategy);
 
@@ -203,6 +210,7 @@ int run_command(const RunOptions& options) {
   summary.add("colour_lower_bound", graph.colour_lower_bound());
   summary.add("strategy", colouring ? simulation.strategy : std::string("none"));
   summary.add("mode", std::string(solver_mode_name(settings.mode)));
+  summary.add("particle_layout", std::string(particle_layout_name(settings.particle_layout)));
   summary.add("threads", statistics.threads);
   summary.add("frames", simulation.frames);
   summary.add("substeps", simulation.substeps);

@@ -112,10 +112,25 @@ TEST_F(Cli, InfoNamesTheBuild) {
   EXPECT_NE(text.out.find("simd_target"), std::string::npos);
 }
 
+TEST_F(Cli, ParticleLayoutChangesTheSweepsButNotTheResult) {
+  const Json interleaved = run_json({"run", "cloth:12x10", "--frames", "3"});
+  const Json separate =
+      run_json({"run", "cloth:12x10", "--frames", "3", "--particle-layout", "separate"});
+  EXPECT_EQ(interleaved["particle_layout"], "interleaved") << "the default";
+  EXPECT_EQ(separate["particle_layout"], "separate");
+  EXPECT_EQ(separate["state_hash"], interleaved["state_hash"]);
+  const Outcome bad = run({"run", "cloth:12x10", "--frames", "1", "--particle-layout", "aos"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("particle layout"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("aos"), std::string::npos) << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+}
+
 TEST_F(Cli, RunSummaryHoldsEveryKey) {
   const Json summary = run_json({"run", "cloth:12x10", "--frames", "3", "--threads", "2"});
   for (const char* key : {"scene", "particles", "constraints", "colours", "colour_lower_bound",
-                          "strategy", "mode", "threads", "frames", "substeps", "iterations",
+                          "strategy", "mode", "particle_layout", "threads", "frames",
+                          "substeps", "iterations",
                           "seconds_total", "seconds_coloring", "seconds_projection",
                           "projections_per_second", "residual_rms_initial",
                           "residual_rms_final", "state_hash"})

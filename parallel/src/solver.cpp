@@ -6,6 +6,8 @@
 // cache).
 #include <tessera/parallel/solver.hpp>
 
+#include <tessera/core/time_integration.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -513,6 +515,7 @@ void Solver::project(std::size_t iterations, Real dt) {
   projection_dt_ = dt;
   const auto start = Clock::now();
   save_state();
+  interleaved_current_ = false;  // the state may have been set since the last step
   {
     begin_sweeps();
     const EndSweeps end_sweeps_on_exit{this};  // also when a phase hook throws
@@ -541,23 +544,21 @@ void Solver::reset_lambdas() {
   if (contact_colours_) contact_colours_->constraints.for_each(reset);
 }
 
+IntegrationStep Solver::integration_step(Real h) const {
+  IntegrationStep step{h, {settings_.gravity.x() * h, settings_.gravity.y() * h,
+                           settings_.gravity.z() * h}};
+  step.velocity_scale = std::max(Real(0), Real(1) - settings_.velocity_damping * h) / h;
+  return step;
+}
+
 void Solver::integrate(Real h) {
-  const Real gx = settings_.gravity.x() * h, gy = settings_.gravity.y() * h,
-             gz = settings_.gravity.z() * h;
+  // Interleaved, the prediction also makes the sweeps' copy (begin_sweeps has nothing to do).
+  const IntegrationStep step = integration_step(h);
+  Real* xyzw = prepare_interleaved() ? interleaved_.data() : nullptr;
   parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
-    for (std::size_t i = first; i < last; ++i) {
-      state_.previous_x[i] = state_.x[i];
-      state_.previous_y[i] = state_.y[i];
-      state_.previous_z[i] = state_.z[i];
-      if (!(state_.inverse_mass[i] > 0)) continue;
-      state_.velocity_x[i] += gx;
-      state_.velocity_y[i] += gy;
-      state_.velocity_z[i] += gz;
-      state_.x[i] += h * state_.velocity_x[i];
-      state_.y[i] += h * state_.velocity_y[i];
-      state_.z[i] += h * state_.velocity_z[i];
-    }
+    predict_positions(state_, step, xyzw, first, last);
   });
+  interleaved_current_ = xyzw != nullptr;
 }
 
 ParticleArrays Solver::sweep_arrays() {
@@ -565,12 +566,20 @@ ParticleArrays Solver::sweep_arrays() {
   return ParticleArrays::of_interleaved(interleaved_.data(), state_.size());
 }
 
+bool Solver::prepare_interleaved() {
+  interleaved_current_ = false;
+  if (settings_.particle_layout != ParticleLayout::interleaved) return false;
+  interleaved_.resize(4 * padded_size(state_.size()));  // the passes run whole vectors
+  return true;
+}
+
 void Solver::begin_sweeps() {
-  if (settings_.particle_layout != ParticleLayout::interleaved) return;
-  interleaved_.resize(4 * state_.size());
-  parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
-    interleave_particles(state_, interleaved_.data(), first, last);
-  });
+  const bool current = interleaved_current_;  // made by this substep's prediction
+  if (!prepare_interleaved()) return;
+  if (!current)
+    parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
+      interleave_particles(state_, interleaved_.data(), first, last);
+    });
   sweeping_ = true;
 }
 
@@ -598,33 +607,17 @@ void Solver::update_velocities(Real h) {
 }
 
 void Solver::update_velocities_and_integrate(Real h) {
-  const Real scale = std::max(Real(0), Real(1) - settings_.velocity_damping * h) / h;
-  const Real gx = settings_.gravity.x() * h, gy = settings_.gravity.y() * h,
-             gz = settings_.gravity.z() * h;
+  // Reads the sweeps' positions (the interleaved copy while sweeping) and writes the
+  // prediction to the state and, interleaved, to the next substep's sweep copy: between two
+  // substeps the copies in and out of the interleaved layout cost no pass of their own.
+  const IntegrationStep step = integration_step(h);
+  const bool interleaved = sweeping_;
+  Real* xyzw = interleaved ? interleaved_.data() : nullptr;
   parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
-    for (std::size_t i = first; i < last; ++i) {
-      const Real x = state_.x[i], y = state_.y[i], z = state_.z[i];
-      if (!(state_.inverse_mass[i] > 0)) {
-        state_.velocity_x[i] = state_.velocity_y[i] = state_.velocity_z[i] = 0;
-        state_.previous_x[i] = x;
-        state_.previous_y[i] = y;
-        state_.previous_z[i] = z;
-        continue;
-      }
-      const Real vx = (x - state_.previous_x[i]) * scale + gx;
-      const Real vy = (y - state_.previous_y[i]) * scale + gy;
-      const Real vz = (z - state_.previous_z[i]) * scale + gz;
-      state_.previous_x[i] = x;
-      state_.previous_y[i] = y;
-      state_.previous_z[i] = z;
-      state_.velocity_x[i] = vx;
-      state_.velocity_y[i] = vy;
-      state_.velocity_z[i] = vz;
-      state_.x[i] = x + h * vx;
-      state_.y[i] = y + h * vy;
-      state_.z[i] = z + h * vz;
-    }
+    update_velocities_and_predict(state_, step, xyzw, interleaved, first, last);
   });
+  sweeping_ = false;  // the state holds the positions again, and the copy the prediction
+  interleaved_current_ = interleaved;
 }
 
 void Solver::step() {
@@ -634,6 +627,7 @@ void Solver::step() {
   projection_dt_ = h;
   report_.history.clear();
   save_state();
+  interleaved_current_ = false;  // a copy left by a step that threw is not this state's
   bool predicted = false;  // by the fused pass at the end of the substep before
   for (std::size_t substep = 0; substep < settings_.substeps; ++substep) {
     const bool last = substep + 1 == settings_.substeps;
@@ -654,20 +648,20 @@ void Solver::step() {
           report_.history.push_back(residual());
         }
       }
+      if (!(last && settings_.record_convergence))
+        statistics_.seconds_projection += seconds_since(projection_start);
+      statistics_.projections += std::uint64_t(settings_.iterations) *
+                                 (statistics_.constraints + dynamic_count_ +
+                                  contacts_.constraint_count +
+                                  (contact_colours_ ? contact_colours_->constraint_count : 0));
+      // Between two substeps with no velocity pass, the velocity update and the next
+      // prediction are one pass over the particles, reading the sweeps' copy directly.
+      if (!last && velocity_stages_.empty()) {
+        update_velocities_and_integrate(h);
+        predicted = true;
+      }
     }
-    if (!(last && settings_.record_convergence))
-      statistics_.seconds_projection += seconds_since(projection_start);
-    statistics_.projections += std::uint64_t(settings_.iterations) *
-                               (statistics_.constraints + dynamic_count_ +
-                                contacts_.constraint_count +
-                                (contact_colours_ ? contact_colours_->constraint_count : 0));
-    // Between two substeps with no velocity pass, the velocity update and the next
-    // prediction are one pass over the particles.
-    if (!last && velocity_stages_.empty()) {
-      update_velocities_and_integrate(h);
-      predicted = true;
-      continue;
-    }
+    if (predicted) continue;
     update_velocities(h);
     for (const Stage& stage : velocity_stages_) run_stage(stage, projection);
     if (last && settings_.report_residuals) report_.residual_after = residual();

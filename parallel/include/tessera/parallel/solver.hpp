@@ -40,6 +40,7 @@
 #include <tessera/core/real.hpp>
 #include <tessera/coloring/model_graph.hpp>
 #include <tessera/core/model.hpp>
+#include <tessera/core/time_integration.hpp>
 #include <tessera/parallel/residual.hpp>
 #include <tessera/parallel/schedule.hpp>
 #include <tessera/parallel/solver_mode.hpp>
@@ -310,6 +311,10 @@ class Solver {
   /// positions back after its last (nothing for ParticleLayout::separate).
   void begin_sweeps();
   void end_sweeps();
+  /// Sizes the interleaved copy when the layout is interleaved (false: separate); the copy
+  /// is no longer current.
+  bool prepare_interleaved();
+  IntegrationStep integration_step(Real h) const;
   struct EndSweeps {
     Solver* solver;
     ~EndSweeps() { solver->end_sweeps(); }
@@ -355,6 +360,8 @@ class Solver {
   /// ParticleLayout::interleaved: x, y, z, w per particle while sweeping (sweeping_).
   AlignedVector<Real> interleaved_;
   bool sweeping_ = false;
+  /// The copy equals the state: made by this substep's prediction, for begin_sweeps.
+  bool interleaved_current_ = false;
   /// The schedule's Jacobi set's work, and the dynamic constraints' set (mode sequential:
   /// the constraints as given and one block per family, swept in order) and work.
   JacobiWork jacobi_work_;

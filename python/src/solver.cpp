@@ -79,7 +79,8 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
                              std::size_t block_size, std::size_t hybrid_threshold,
                              bool report_residuals, bool record_convergence, bool check_finite,
                              double divergence_rms, const std::string& sequential_order,
-                             const std::string& contact_scheduling) {
+                             const std::string& contact_scheduling,
+                             const std::string& particle_layout) {
   SolverSettings s;
   s.mode = parse_solver_mode(mode);
   s.threads = threads;
@@ -105,6 +106,7 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
   s.divergence_rms = Real(divergence_rms);
   s.sequential_order = parse_sequential_order(sequential_order);
   s.contact_scheduling = parse_contact_scheduling(contact_scheduling);
+  s.particle_layout = parse_particle_layout(particle_layout);
   return s;
 }
 
@@ -125,12 +127,13 @@ void bind_solver(py::module_& m) {
                        double velocity_damping, double jacobi_relaxation, std::size_t block_size,
                        std::size_t hybrid_threshold, bool report_residuals,
                        bool record_convergence, bool check_finite, double divergence_rms,
-                       const std::string& sequential_order, const std::string& contact_scheduling) {
+                       const std::string& sequential_order, const std::string& contact_scheduling,
+                       const std::string& particle_layout) {
              const SolverSettings settings = make_settings(
                  mode, threads, semantics, time_step, substeps, iterations, gravity,
                  velocity_damping, jacobi_relaxation, block_size, hybrid_threshold,
                  report_residuals, record_convergence, check_finite, divergence_rms,
-                 sequential_order, contact_scheduling);
+                 sequential_order, contact_scheduling, particle_layout);
              if (settings.mode == SolverMode::sequential && !colouring) return Solver(model, settings);
              if (!colouring)
                throw InvalidInput("solver: mode " + mode +
@@ -154,7 +157,8 @@ void bind_solver(py::module_& m) {
            py::arg("check_finite") = true, py::arg("divergence_rms") = 10.0,
            py::arg("sequential_order") = "groups",
            py::arg("contact_scheduling") =
-               std::string(contact_scheduling_name(kDefaultContactScheduling)))
+               std::string(contact_scheduling_name(kDefaultContactScheduling)),
+           py::arg("particle_layout") = std::string(particle_layout_name(kDefaultParticleLayout)))
       .def(
           "step",
           [](Solver& solver, std::size_t steps) {

@@ -260,6 +260,7 @@ class Solver:
         divergence_rms: float = 10.0,
         sequential_order: str = "groups",
         contact_scheduling: str = "coloured",
+        particle_layout: str = "interleaved",
     ) -> None: ...
     def step(self, steps: int = 1) -> None:
         """`steps` time steps; raises NumericalFailure (state restored). Releases the GIL."""

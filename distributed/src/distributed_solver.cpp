@@ -243,8 +243,10 @@ void DistributedSolver::start_exchange(std::size_t k, ParticleArrays particles) 
   if (sends.empty() && receives.empty()) return;
   send_buffer_.clear();
   for (const Transfer& t : sends)
-    for (const std::uint32_t i : t.local)
-      send_buffer_.insert(send_buffer_.end(), {particles.x[particles.at(i)], particles.y[particles.at(i)], particles.z[particles.at(i)]});
+    for (const std::uint32_t i : t.local) {
+      const std::size_t at = particles.at(i);
+      send_buffer_.insert(send_buffer_.end(), {particles.x[at], particles.y[at], particles.z[at]});
+    }
   // MPI guarantees tags up to 32767 (block mode uses the last two); order is per pair.
   post(sends, send_buffer_, receives, int(k % 32766));
 }

@@ -141,6 +141,24 @@ TEST(Solver, AnyThreadCountGivesBitwiseTheSameStateForEveryModeAndStrategy) {
       }
 }
 
+// The coloured phases of an iteration run in one parallel region whose threads wait for each
+// phase's blocks (phase_progress.hpp). More solver threads than the machine runs at once
+// (TBB then runs some of the region's tasks after others) must neither hang nor change a bit.
+TEST(Solver, MoreThreadsThanTheMachineRunsNeitherHangNorChangeTheResult) {
+  const Model cloth = test::cloth_model(24, 20);
+  std::vector<Vector3r> result[2];
+  for (const std::size_t threads : {std::size_t(1), std::size_t(7)}) {
+    SolverSettings settings;
+    settings.threads = threads;
+    settings.iterations = 3;
+    settings.block_size = 16;  // many blocks per phase, so every thread claims some
+    Solver solver = make_solver(cloth, settings, "stencil");
+    for (int s = 0; s < 20; ++s) solver.step();
+    result[threads == 1 ? 0 : 1] = solver.positions();
+  }
+  EXPECT_TRUE(same_bits(result[0], result[1]));
+}
+
 TEST(Solver, StaticParticlesStayExactlyWhereTheyAre) {
   const Model model = test::cloth_model(8, 8);
   for (const SolverMode mode : test::kSolverModes) {

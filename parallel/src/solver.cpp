@@ -25,7 +25,6 @@
 #include <tessera/core/batch_reorder.hpp>
 #include "contact_colouring.hpp"
 #include "jacobi_set.hpp"
-#include "phase_progress.hpp"
 #include "residual_sum.hpp"
 
 namespace tessera {
@@ -328,46 +327,6 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
   }
 }
 
-void Solver::run_coloured_phases(std::size_t first, std::size_t last,
-                                 const ProjectionSettings& projection) {
-  const std::size_t phases = last - first;
-  const std::size_t threads = statistics_.threads;
-  if (!phase_progress_) phase_progress_ = std::make_unique<detail::PhaseProgress>();
-  detail::PhaseProgress& progress = *phase_progress_;
-  progress.reset(phases);
-  const ParticleArrays particles = sweep_arrays();
-  const auto sweep = [&] {
-    for (std::size_t k = 0; k < phases; ++k) {
-      const Stage& stage = stages_[first + k];
-      ConstraintSets& sets = batches_of(stage.set);
-      const auto blocks = blocks_of(stage);
-      const auto count = std::uint32_t(blocks.size());
-      // About four claims per thread and phase: few shared-counter updates, and a thread
-      // that finishes early still takes work from a slow one.
-      const std::uint32_t chunk =
-          std::max<std::uint32_t>(1, std::uint32_t(count / (4 * threads)));
-      for (;;) {
-        std::uint32_t claimed = 0;
-        const std::uint32_t begin = progress.claim(k, chunk, count, claimed);
-        if (claimed == 0) break;
-        for (std::uint32_t b = begin; b < begin + claimed; ++b)
-          kProjectBlock[std::size_t(blocks[b].family)](particles, sets, blocks[b].begin,
-                                                       blocks[b].end, projection);
-        progress.finished(k, claimed);
-      }
-      progress.wait(k, count);
-    }
-  };
-  arena_->execute([&] {
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, threads, 1),
-        [&](const tbb::blocked_range<std::size_t>& r) {
-          for (std::size_t t = r.begin(); t != r.end(); ++t) sweep();
-        },
-        tbb::static_partitioner());
-  });
-}
-
 void Solver::jacobi_projection(JacobiSet& jacobi, JacobiWork& work,
                                std::span<const ScheduleBlock> blocks,
                                const ProjectionSettings& projection) {
@@ -466,17 +425,7 @@ void Solver::iterate(const ProjectionSettings& projection, std::size_t iteration
                       : iteration == delay + 1 ? Real(2) / (Real(2) - rho2)
                                                : Real(4) / (Real(4) - rho2 * chebyshev_weight_);
   if (!phase_hook_) {
-    for (std::size_t s = 0; s < stages_.size();) {
-      // A run of coloured phases goes to one parallel region (phase_progress.hpp).
-      std::size_t e = s;
-      while (e < stages_.size() && stages_[e].kind == StageKind::coloured_phase) ++e;
-      if (e - s >= 2 && statistics_.threads > 1) {
-        run_coloured_phases(s, e, projection);
-        s = e;
-        continue;
-      }
-      run_stage(stages_[s++], projection);
-    }
+    for (const Stage& stage : stages_) run_stage(stage, projection);
     return;
   }
   phase_hook_(kBeforePhases, sweep_arrays());

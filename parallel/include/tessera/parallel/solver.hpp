@@ -50,7 +50,6 @@ namespace tessera {
 
 namespace detail {
 struct ColouredContacts;
-class PhaseProgress;
 }
 
 /// Jacobi over-relaxation ω when nothing else is said (see the README for the measurement).
@@ -341,9 +340,6 @@ class Solver {
   void build_stages();
   /// The one dispatcher: runs any stage.
   void run_stage(const Stage& stage, const ProjectionSettings& projection);
-  /// Coloured-phase stages [first, last) of stages_ in one parallel region (phase_progress.hpp).
-  void run_coloured_phases(std::size_t first, std::size_t last,
-                           const ProjectionSettings& projection);
   ConstraintSets& batches_of(StageSet set);
   std::span<const ScheduleBlock> blocks_of(const Stage& stage) const;
   /// The `iteration`th (1-based) iteration of a solve (a substep's or a project() call's).
@@ -375,8 +371,6 @@ class Solver {
   /// the slots are the caller's order).
   std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> dynamic_source_;
   std::vector<Stage> stages_, velocity_stages_;
-  /// The counters of run_coloured_phases.
-  std::unique_ptr<detail::PhaseProgress> phase_progress_;
   PhaseHook phase_hook_;
   /// Chebyshev acceleration: the schedule's Jacobi set's particles (JacobiSet::particles
   /// order) one iteration before the last, the iteration under way and its weight ω.

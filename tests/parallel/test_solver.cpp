@@ -141,9 +141,8 @@ TEST(Solver, AnyThreadCountGivesBitwiseTheSameStateForEveryModeAndStrategy) {
       }
 }
 
-// The coloured phases of an iteration run in one parallel region whose threads wait for each
-// phase's blocks (phase_progress.hpp). More solver threads than the machine runs at once
-// (TBB then runs some of the region's tasks after others) must neither hang nor change a bit.
+// More solver threads than the machine runs at once (TBB then runs some of a phase's tasks
+// after others) must neither hang nor change a bit.
 TEST(Solver, MoreThreadsThanTheMachineRunsNeitherHangNorChangeTheResult) {
   const Model cloth = test::cloth_model(24, 20);
   std::vector<Vector3r> result[2];

@@ -21,6 +21,7 @@
 // n×n×4n-cell FEM bar (n = 10 … 100, about as many particles as the cloths). Counters as above
 // plus particles, constraints and model_bytes_per_second (projections/s × bytes/projection).
 // Only one size scene is kept in memory at a time (the 2048² cloth takes gigabytes).
+// solver_size_separate/gs/<largest size>: the same with ParticleLayout::separate.
 //
 // Traffic model, bytes a projection must move between memory and the core when nothing is
 // reused from cache: for each of its N particles, x, y, z and inverse mass gathered (4 reals)
@@ -276,9 +277,11 @@ const SizeScene& size_scene(const std::string& kind, std::size_t size) {
   return current;
 }
 
-void BM_SolverSize(benchmark::State& state, const std::string& kind, std::size_t size) {
+void BM_SolverSize(benchmark::State& state, const std::string& kind, std::size_t size,
+                   ParticleLayout layout = kDefaultParticleLayout) {
   const SizeScene& scene = size_scene(kind, size);
   SolverSettings settings;
+  settings.particle_layout = layout;
   settings.threads = std::size_t(state.range(0));
   settings.iterations = 1;
   settings.report_residuals = false;
@@ -313,6 +316,15 @@ void register_size_benchmarks() {
           });
       b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(1);
       if (hardware_threads > 1) b->Arg(hardware_threads);
+      // The largest size once more with the separate arrays, for the layout's gain out of
+      // cache (registered right after it, so the scene is still built).
+      if (size != sizes.back()) continue;
+      auto* separate = benchmark::RegisterBenchmark(
+          ("solver_size_separate/gs/" + scene_kind + ":" + std::to_string(size)).c_str(),
+          [scene_kind, size](benchmark::State& state) {
+            BM_SolverSize(state, scene_kind, size, ParticleLayout::separate);
+          });
+      separate->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(1);
     }
 }
 

@@ -36,6 +36,12 @@
 
 #include "lane_math-inl.h"
 
+// AVX-512 of any flavour (AVX3, and AVX3_DL, which a -march=native build on Zen 4 or Ice Lake
+// and later compiles for): the intrinsics below need only AVX-512F.
+#ifndef TESSERA_TARGET_AVX512
+#define TESSERA_TARGET_AVX512 (HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3)
+#endif
+
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
 namespace HWY_NAMESPACE {
@@ -68,7 +74,7 @@ struct ParticleLanes {
   RealLanes inverse_mass;
 };
 
-#if HWY_TARGET == HWY_AVX3 && !TESSERA_DOUBLE_PRECISION
+#if TESSERA_TARGET_AVX512 && !TESSERA_DOUBLE_PRECISION
 /// Lanes m, m+4, m+8, m+12's particles, one per 128-bit block.
 template <int M>
 HWY_INLINE __m512 load_particle_quad(const Real* xyzw, const ParticleIndex* indices) {
@@ -76,6 +82,13 @@ HWY_INLINE __m512 load_particle_quad(const Real* xyzw, const ParticleIndex* indi
   q = _mm512_insertf32x4(q, _mm_load_ps(xyzw + 4 * std::size_t(indices[M + 4])), 1);
   q = _mm512_insertf32x4(q, _mm_load_ps(xyzw + 4 * std::size_t(indices[M + 8])), 2);
   return _mm512_insertf32x4(q, _mm_load_ps(xyzw + 4 * std::size_t(indices[M + 12])), 3);
+}
+#elif TESSERA_TARGET_AVX512 && TESSERA_DOUBLE_PRECISION
+/// Double: lanes A and B's particles (32 bytes each), one per 256-bit half.
+template <int A, int B>
+HWY_INLINE __m512d load_particle_pair(const Real* xyzw, const ParticleIndex* indices) {
+  const __m512d q = _mm512_castpd256_pd512(_mm256_load_pd(xyzw + 4 * std::size_t(indices[A])));
+  return _mm512_insertf64x4(q, _mm256_load_pd(xyzw + 4 * std::size_t(indices[B])), 1);
 }
 #elif HWY_TARGET == HWY_AVX2 && !TESSERA_DOUBLE_PRECISION
 /// Lanes m and m+4's particles, one per 128-bit block.
@@ -89,7 +102,7 @@ HWY_INLINE __m256 load_particle_quad(const Real* xyzw, const ParticleIndex* indi
 /// The interleaved layout's gather (see the top of this file).
 HWY_INLINE ParticleLanes gather_interleaved(const Real* xyzw, const ParticleIndex* indices) {
   const RealTag d;
-#if HWY_TARGET == HWY_AVX3 && !TESSERA_DOUBLE_PRECISION
+#if TESSERA_TARGET_AVX512 && !TESSERA_DOUBLE_PRECISION
   const __m512 q0 = load_particle_quad<0>(xyzw, indices), q1 = load_particle_quad<1>(xyzw, indices);
   const __m512 q2 = load_particle_quad<2>(xyzw, indices), q3 = load_particle_quad<3>(xyzw, indices);
   const __m512 t0 = _mm512_unpacklo_ps(q0, q1), t1 = _mm512_unpackhi_ps(q0, q1);
@@ -97,6 +110,18 @@ HWY_INLINE ParticleLanes gather_interleaved(const Real* xyzw, const ParticleInde
   return {{RealLanes{_mm512_shuffle_ps(t0, t2, 0x44)}, RealLanes{_mm512_shuffle_ps(t0, t2, 0xEE)},
            RealLanes{_mm512_shuffle_ps(t1, t3, 0x44)}},
           RealLanes{_mm512_shuffle_ps(t1, t3, 0xEE)}};
+#elif TESSERA_TARGET_AVX512 && TESSERA_DOUBLE_PRECISION
+  // Pairs [L0|L2], [L1|L3], [L4|L6], [L5|L7]; unpacks give [x x | z z] and [y y | w w] per
+  // half, and 128-bit block shuffles put lanes 0 .. 7 in order.
+  const __m512d q0 = load_particle_pair<0, 2>(xyzw, indices);
+  const __m512d q1 = load_particle_pair<1, 3>(xyzw, indices);
+  const __m512d q2 = load_particle_pair<4, 6>(xyzw, indices);
+  const __m512d q3 = load_particle_pair<5, 7>(xyzw, indices);
+  const __m512d t0 = _mm512_unpacklo_pd(q0, q1), t1 = _mm512_unpackhi_pd(q0, q1);
+  const __m512d t2 = _mm512_unpacklo_pd(q2, q3), t3 = _mm512_unpackhi_pd(q2, q3);
+  return {{RealLanes{_mm512_shuffle_f64x2(t0, t2, 0x88)}, RealLanes{_mm512_shuffle_f64x2(t1, t3, 0x88)},
+           RealLanes{_mm512_shuffle_f64x2(t0, t2, 0xDD)}},
+          RealLanes{_mm512_shuffle_f64x2(t1, t3, 0xDD)}};
 #elif HWY_TARGET == HWY_AVX2 && !TESSERA_DOUBLE_PRECISION
   const __m256 q0 = load_particle_quad<0>(xyzw, indices), q1 = load_particle_quad<1>(xyzw, indices);
   const __m256 q2 = load_particle_quad<2>(xyzw, indices), q3 = load_particle_quad<3>(xyzw, indices);
@@ -106,7 +131,7 @@ HWY_INLINE ParticleLanes gather_interleaved(const Real* xyzw, const ParticleInde
            RealLanes{_mm256_shuffle_ps(t1, t3, 0x44)}},
           RealLanes{_mm256_shuffle_ps(t1, t3, 0xEE)}};
 #else
-  // Other targets and double: four gathers with the index scaled to the particle's 4 values.
+  // Other targets (and AVX2 in double): four gathers with the index scaled to 4 per particle.
   const IndexLanes index = hn::ShiftLeft<2>(load_particle_indices(indices));
   return {{hn::GatherIndex(d, xyzw, index), hn::GatherIndex(d, xyzw + 1, index),
            hn::GatherIndex(d, xyzw + 2, index)},
@@ -134,14 +159,14 @@ HWY_INLINE std::uint64_t mask_bits(const LaneMask& mask) {
   return bits;
 }
 
-#if (HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX2) && !TESSERA_DOUBLE_PRECISION
+#if (TESSERA_TARGET_AVX512 || HWY_TARGET == HWY_AVX2) && !TESSERA_DOUBLE_PRECISION
 /// Stores lane L = 4k + m (block k of quad m) when bit L of `bits` is set.
 template <int L, class Quad>
 HWY_INLINE void store_particle_lane(Real* xyzw, const ParticleIndex* indices,
                                     const Quad (&quad)[4], std::uint32_t bits) {
   if (!((bits >> L) & 1u)) return;
   Real* to = xyzw + 4 * std::size_t(indices[L]);
-#if HWY_TARGET == HWY_AVX3
+#if TESSERA_TARGET_AVX512
   _mm_store_ps(to, _mm512_extractf32x4_ps(quad[L % 4], L / 4));
 #else
   _mm_store_ps(to, _mm256_extractf128_ps(quad[L % 4], L / 4));
@@ -156,12 +181,30 @@ HWY_INLINE void store_particle_lanes(Real* xyzw, const ParticleIndex* indices,
 }
 #endif
 
+#if TESSERA_TARGET_AVX512 && TESSERA_DOUBLE_PRECISION
+/// Stores lane L (half (L >> 1) & 1 of pair (L & 1) + 2 (L >> 2)) when bit L of `bits` is set.
+template <int L>
+HWY_INLINE void store_particle_pair_lane(Real* xyzw, const ParticleIndex* indices,
+                                         const __m512d (&pair)[4], std::uint32_t bits) {
+  if (!((bits >> L) & 1u)) return;
+  _mm256_store_pd(xyzw + 4 * std::size_t(indices[L]),
+                  _mm512_extractf64x4_pd(pair[(L & 1) + 2 * (L >> 2)], (L >> 1) & 1));
+}
+
+template <int... L>
+HWY_INLINE void store_particle_pairs(Real* xyzw, const ParticleIndex* indices,
+                                     const __m512d (&pair)[4], std::uint32_t bits,
+                                     std::integer_sequence<int, L...>) {
+  (store_particle_pair_lane<L>(xyzw, indices, pair, bits), ...);
+}
+#endif
+
 /// The interleaved layout's scatter: the inverse transpose, one whole-particle store per lane
 /// of `write` (w is stored back unchanged).
 HWY_INLINE void scatter_interleaved(Real* xyzw, const ParticleIndex* indices, RealLanes x,
                                     RealLanes y, RealLanes z, RealLanes w,
                                     const LaneMask& write) {
-#if HWY_TARGET == HWY_AVX3 && !TESSERA_DOUBLE_PRECISION
+#if TESSERA_TARGET_AVX512 && !TESSERA_DOUBLE_PRECISION
   const std::uint32_t bits = std::uint32_t(write.raw);
   if (bits == 0) return;
   const __m512 t0 = _mm512_unpacklo_ps(x.raw, y.raw), t1 = _mm512_unpackhi_ps(x.raw, y.raw);
@@ -169,6 +212,19 @@ HWY_INLINE void scatter_interleaved(Real* xyzw, const ParticleIndex* indices, Re
   const __m512 quad[4] = {_mm512_shuffle_ps(t0, t2, 0x44), _mm512_shuffle_ps(t0, t2, 0xEE),
                           _mm512_shuffle_ps(t1, t3, 0x44), _mm512_shuffle_ps(t1, t3, 0xEE)};
   store_particle_lanes(xyzw, indices, quad, bits, std::make_integer_sequence<int, 16>());
+#elif TESSERA_TARGET_AVX512 && TESSERA_DOUBLE_PRECISION
+  const std::uint32_t bits = std::uint32_t(write.raw);
+  if (bits == 0) return;
+  // The inverse of the gather's transpose: pairs [L0|L2], [L1|L3], [L4|L6], [L5|L7].
+  const __m512i low = _mm512_setr_epi64(0, 1, 8, 9, 2, 3, 10, 11);
+  const __m512i high = _mm512_setr_epi64(4, 5, 12, 13, 6, 7, 14, 15);
+  const __m512d t0 = _mm512_permutex2var_pd(x.raw, low, z.raw);
+  const __m512d t2 = _mm512_permutex2var_pd(x.raw, high, z.raw);
+  const __m512d t1 = _mm512_permutex2var_pd(y.raw, low, w.raw);
+  const __m512d t3 = _mm512_permutex2var_pd(y.raw, high, w.raw);
+  const __m512d pair[4] = {_mm512_unpacklo_pd(t0, t1), _mm512_unpackhi_pd(t0, t1),
+                           _mm512_unpacklo_pd(t2, t3), _mm512_unpackhi_pd(t2, t3)};
+  store_particle_pairs(xyzw, indices, pair, bits, std::make_integer_sequence<int, 8>());
 #elif HWY_TARGET == HWY_AVX2 && !TESSERA_DOUBLE_PRECISION
   const std::uint32_t bits = std::uint32_t(mask_bits(write));
   if (bits == 0) return;
@@ -210,12 +266,12 @@ HWY_INLINE void scatter_corrected(ParticleArrays& particles, const ParticleIndex
   const RealLanes z = lanes.position.z + correction.z;
   if (particles.interleaved())
     return scatter_interleaved(particles.x, indices, x, y, z, lanes.inverse_mass, write);
-#if HWY_TARGET == HWY_AVX3 && TESSERA_DOUBLE_PRECISION
+#if TESSERA_TARGET_AVX512 && TESSERA_DOUBLE_PRECISION
   const __m256i index = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(indices));
   _mm512_mask_i32scatter_pd(particles.x, write.raw, index, x.raw, 8);
   _mm512_mask_i32scatter_pd(particles.y, write.raw, index, y.raw, 8);
   _mm512_mask_i32scatter_pd(particles.z, write.raw, index, z.raw, 8);
-#elif HWY_TARGET == HWY_AVX3
+#elif TESSERA_TARGET_AVX512
   const __m512i index = _mm512_loadu_si512(indices);
   _mm512_mask_i32scatter_ps(particles.x, write.raw, index, x.raw, 4);
   _mm512_mask_i32scatter_ps(particles.y, write.raw, index, y.raw, 4);

@@ -36,7 +36,7 @@ void ProjectColliderContacts(ParticleArrays particles, ColliderContacts& contact
     ParticleLanes gathered[1];
     Vec3<RealLanes> p[1];
     RealLanes w[1];
-    gather_constraint_particles<1>(particles, slot, i, gathered, p, w);
+    gather_constraint_particles<1>(particles, slot, i, end, gathered, p, w);
     RealLanes lambda = load(contacts.lambda.data(), i);
     const auto solved = collider_contact_position_solve(
         w[0], p[0], load_vec3(contacts.normal, i), load(contacts.offset.data(), i),
@@ -58,7 +58,7 @@ void SolveColliderContactVelocities(ParticleArrays velocities, const ColliderCon
     ParticleLanes gathered[1];
     Vec3<RealLanes> v[1];
     RealLanes w[1];
-    gather_constraint_particles<1>(velocities, slot, i, gathered, v, w);
+    gather_constraint_particles<1>(velocities, slot, i, end, gathered, v, w);
     const auto solved = collider_contact_velocity_solve(
         w[0], v[0], load_vec3(contacts.normal, i), load(contacts.normal_speed.data(), i),
         load(contacts.restitution.data(), i), load(contacts.lambda.data(), i));

@@ -34,7 +34,7 @@ HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
     ParticleLanes gathered[4];
     Vec3<RealLanes> p[4];
     RealLanes w[4];
-    gather_constraint_particles(particles, slot, i, gathered, p, w);
+    gather_constraint_particles(particles, slot, i, end, gathered, p, w);
     Mat3<RealLanes> rest_inverse;
     for (int j = 0; j < 3; ++j)
       rest_inverse.col[j] = {

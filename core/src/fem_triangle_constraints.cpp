@@ -30,7 +30,7 @@ void ProjectFEMTriangleConstraints(ParticleArrays particles,
     ParticleLanes gathered[3];
     Vec3<RealLanes> p[3];
     RealLanes w[3];
-    gather_constraint_particles(particles, slot, i, gathered, p, w);
+    gather_constraint_particles(particles, slot, i, end, gathered, p, w);
     RealLanes m[2][2];
     for (int k = 0; k < 2; ++k)
       for (int j = 0; j < 2; ++j)

@@ -42,11 +42,12 @@ struct ContactLanes {
 };
 
 HWY_INLINE ContactLanes gather_contact(const ParticleArrays& arrays,
-                                       const ParticleTetContacts& contacts, std::size_t i) {
+                                       const ParticleTetContacts& contacts, std::size_t i,
+                                       std::size_t end) {
   ContactLanes lanes;
-  lanes.particle = gather_particles(arrays, contacts.particles.particle[0].data() + i);
+  lanes.particle = gather_particles(arrays, contacts.particles.particle[0].data() + i, end - i);
   for (int k = 0; k < 4; ++k) {
-    lanes.tet[k] = gather_particles(arrays, contacts.particles.particle[k + 1].data() + i);
+    lanes.tet[k] = gather_particles(arrays, contacts.particles.particle[k + 1].data() + i, end - i);
     lanes.w[k] = lanes.tet[k].inverse_mass;
     lanes.x[k] = lanes.tet[k].position;
   }
@@ -77,7 +78,7 @@ void InitParticleTetContacts(ParticleArrays velocities, ParticleTetContacts& con
   const std::size_t n = contacts.size();
   for (std::size_t i = 0; i < n; i += hn::Lanes(d)) {
     const std::size_t active_count = n - i;
-    const ContactLanes v = gather_contact(velocities, contacts, i);
+    const ContactLanes v = gather_contact(velocities, contacts, i, n);
     const auto info = contact_init(v.particle.inverse_mass, v.w, v.particle.position, v.x,
                                    load_vec3(contacts.barycentric, i),
                                    load_vec3(contacts.normal, i));
@@ -96,7 +97,7 @@ void ProjectParticleTetContacts(ParticleArrays particles, ParticleTetContacts& c
   for (std::size_t i = begin; i < end; i += hn::Lanes(d)) {
     const std::size_t active_count = end - i;
     const LaneMask active = hn::FirstN(d, active_count);
-    const ContactLanes p = gather_contact(particles, contacts, i);
+    const ContactLanes p = gather_contact(particles, contacts, i, end);
     RealLanes lambda = hn::LoadU(d, contacts.lambda.data() + i);
     const auto correction = contact_position_solve(
         p.particle.inverse_mass, p.w, p.particle.position, p.x,
@@ -114,7 +115,7 @@ void SolveParticleTetContactVelocities(ParticleArrays velocities,
   const RealLanes inverse_dt = hn::Set(d, Real(1) / dt);
   for (std::size_t i = begin; i < end; i += hn::Lanes(d)) {
     const LaneMask active = hn::FirstN(d, end - i);
-    const ContactLanes v = gather_contact(velocities, contacts, i);
+    const ContactLanes v = gather_contact(velocities, contacts, i, end);
     const auto correction = contact_velocity_solve(
         v.particle.inverse_mass, v.w, v.particle.position, v.x,
         load_vec3(contacts.barycentric, i), load_vec3(contacts.normal, i),

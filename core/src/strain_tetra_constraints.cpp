@@ -35,7 +35,7 @@ HWY_NOINLINE void project_strain_tetra_lanes(ParticleArrays particles,
     ParticleLanes gathered[4];
     Vec3<RealLanes> p[4];
     RealLanes w[4];
-    gather_constraint_particles(particles, slot, i, gathered, p, w);
+    gather_constraint_particles(particles, slot, i, end, gathered, p, w);
     RealLanes m[3][3];
     for (int k = 0; k < 3; ++k)
       for (int j = 0; j < 3; ++j)

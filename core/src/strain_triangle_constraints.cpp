@@ -33,7 +33,7 @@ HWY_NOINLINE void project_strain_triangle_lanes(ParticleArrays particles,
     ParticleLanes gathered[3];
     Vec3<RealLanes> p[3];
     RealLanes w[3];
-    gather_constraint_particles(particles, slot, i, gathered, p, w);
+    gather_constraint_particles(particles, slot, i, end, gathered, p, w);
     RealLanes m[2][2];
     for (int k = 0; k < 2; ++k)
       for (int j = 0; j < 2; ++j)

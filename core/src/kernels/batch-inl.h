@@ -139,9 +139,28 @@ HWY_INLINE ParticleLanes gather_interleaved(const Real* xyzw, const ParticleInde
 #endif
 }
 
+/// `indices` when all W lanes are active, else a copy in `scratch` whose lanes at and past
+/// `active` name lane 0's particle. Why: the lanes past a range's end hold padding or the next
+/// block's constraints, whose particles another thread may be writing in this very phase;
+/// loading them would be a data race even though their values are discarded (ThreadSanitizer
+/// sees the interleaved layout's loads, not the hardware gathers, and found it). Lane 0's
+/// particle is this range's own (or static).
+HWY_INLINE const ParticleIndex* active_indices(const ParticleIndex* indices, std::size_t active,
+                                               ParticleIndex (&scratch)[kMaxLanes]) {
+  const std::size_t lanes = hn::Lanes(RealTag());
+  if (active >= lanes) return indices;
+  for (std::size_t lane = 0; lane < lanes; ++lane)
+    scratch[lane] = indices[lane < active ? lane : 0];
+  return scratch;
+}
+
+/// The particles of W lanes, of which the first `active` are used (active ≥ 1).
 HWY_INLINE ParticleLanes gather_particles(const ParticleArrays& particles,
-                                          const ParticleIndex* indices) {
+                                          const ParticleIndex* lane_indices,
+                                          std::size_t active) {
   const RealTag d;
+  HWY_ALIGN ParticleIndex scratch[kMaxLanes];
+  const ParticleIndex* indices = active_indices(lane_indices, active, scratch);
   if (particles.interleaved()) return gather_interleaved(particles.x, indices);
   const IndexLanes index = load_particle_indices(indices);
   return {{hn::GatherIndex(d, particles.x, index), hn::GatherIndex(d, particles.y, index),
@@ -306,11 +325,11 @@ HWY_INLINE void constraint_slots(const ConstraintParticles<N>& indices,
 template <int N>
 HWY_INLINE void gather_constraint_particles(const ParticleArrays& particles,
                                             const ParticleIndex* const* slot, std::size_t i,
-                                            ParticleLanes (&gathered)[N],
+                                            std::size_t end, ParticleLanes (&gathered)[N],
                                             Vec3<RealLanes> (&position)[N],
                                             RealLanes (&w)[N]) {
   for (int k = 0; k < N; ++k) {
-    gathered[k] = gather_particles(particles, slot[k] + i);
+    gathered[k] = gather_particles(particles, slot[k] + i, end - i);
     position[k] = gathered[k].position;
     w[k] = gathered[k].inverse_mass;
   }

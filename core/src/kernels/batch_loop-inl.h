@@ -60,7 +60,7 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
     ParticleLanes gathered[N];
     Vec3<RealLanes> position[N];
     RealLanes w[N];
-    gather_constraint_particles(particles, slot, i, gathered, position, w);
+    gather_constraint_particles(particles, slot, i, end, gathered, position, w);
     const ConstraintValue<RealLanes, N> value = evaluate(position, i);
     Vec3<RealLanes> corr[N];
     if (compliance) {

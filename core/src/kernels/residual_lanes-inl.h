@@ -26,11 +26,12 @@ namespace HWY_NAMESPACE {
 template <int N>
 HWY_INLINE void gather_positions(const ParticleArrays& particles,
                                  const ParticleIndex* const* slot, std::size_t i,
-                                 Vec3<RealLanes> (&p)[N]) {
+                                 std::size_t end, Vec3<RealLanes> (&p)[N]) {
   const RealTag d;
   for (int k = 0; k < N; ++k) {
     if (particles.interleaved()) {
-      p[k] = gather_interleaved(particles.x, slot[k] + i).position;
+      HWY_ALIGN ParticleIndex scratch[kMaxLanes];
+      p[k] = gather_interleaved(particles.x, active_indices(slot[k] + i, end - i, scratch)).position;
       continue;
     }
     const IndexLanes index = load_particle_indices(slot[k] + i);
@@ -51,7 +52,7 @@ HWY_INLINE void residual_lanes(const ParticleArrays& particles,
   constraint_slots(indices, slot);
   for (std::size_t i = begin; i < end; i += lanes) {
     Vec3<RealLanes> p[N];
-    gather_positions<N>(particles, slot, i, p);
+    gather_positions<N>(particles, slot, i, end, p);
     store_active(residual(p, i), end - i, out + (i - begin));
   }
 }

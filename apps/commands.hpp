@@ -19,7 +19,8 @@ struct RunOptions {
   std::optional<std::size_t> frames, substeps, iterations, threads;
   std::optional<double> time_step, velocity_damping, divergence_rms, chebyshev_rho;
   std::optional<std::string> strategy, mode, sequential_order, out, chebyshev, contact_scheduling;
-  std::optional<std::string> distributed, particle_layout;
+  std::optional<std::string> distributed, particle_layout, sweep_order;
+  std::optional<std::size_t> particles_per_part;
   bool write_obj = false;
   bool balance = false;
   bool json = false;

@@ -89,6 +89,13 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
   command->add_option("--particle-layout", options.particle_layout,
                       "how the sweeps hold the particles: interleaved (x, y, z, w per particle, "
                       "default) or separate (an array per coordinate); the same results");
+  command->add_option("--sweep-order", options.sweep_order,
+                      "modes gs and hybrid: colour-major (colour after colour, default) or "
+                      "part-major (each METIS part's colours on one worker while its particles "
+                      "stay in cache, the parts in parallel; needs --strategy metis)");
+  command->add_option("--particles-per-part", options.particles_per_part,
+                      "strategy metis: movable particles per part (default 65536)")
+      ->check(CLI::PositiveNumber);
   command->add_option("--divergence-rms", options.divergence_rms,
                       "a step that ends with an RMS residual above this fails (default 10; inf "
                       "turns the check off)")
@@ -124,6 +131,10 @@ int run_command(const RunOptions& options) {
       setup.settings = solver_settings(setup.simulation);
       if (options.particle_layout)
         setup.settings.particle_layout = parse_particle_layout(*options.particle_layout);
+      if (options.sweep_order &&
+          parse_sweep_order(*options.sweep_order) == SweepOrder::part_major)
+        throw InvalidInput("--sweep-order part-major: a distributed run exchanges its ghosts "
+                           "between colours, which part-major does not keep apart");
       return setup;
     });
 #else
@@ -139,6 +150,10 @@ int run_command(const RunOptions& options) {
   SolverSettings settings = solver_settings(simulation);
   if (options.particle_layout)
     settings.particle_layout = parse_particle_layout(*options.particle_layout);
+  if (options.sweep_order) settings.sweep_order = parse_sweep_order(*options.sweep_order);
+  if (options.particles_per_part && simulation.strategy != "metis")
+    throw InvalidInput("--particles-per-part: strategy " + simulation.strategy +
+                       " has no parts (strategy metis has)");
   const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   const ColouringStrategy& strategy = registry.get(simulation.strategy);
 
@@ -154,7 +169,10 @@ int run_command(const RunOptions& options) {
   if (settings.mode != SolverMode::sequential)
     arena.execute([&] {
       colouring = run_colouring(strategy, graph,
-                                ColouringOptions{.balance = options.balance, .locality = true});
+                                ColouringOptions{.particles_per_part =
+                                                     options.particles_per_part.value_or(0),
+                                                 .balance = options.balance,
+                                                 .locality = true});
     });
   if (colouring && !colouring->statistics.valid)
     throw std::logic_error("strategy " + simulation.strategy + " gave an invalid colouring: " +
@@ -211,6 +229,8 @@ int run_command(const RunOptions& options) {
   summary.add("strategy", colouring ? simulation.strategy : std::string("none"));
   summary.add("mode", std::string(solver_mode_name(settings.mode)));
   summary.add("particle_layout", std::string(particle_layout_name(settings.particle_layout)));
+  summary.add("sweep_order", std::string(sweep_order_name(settings.sweep_order)));
+  summary.add("parts", colouring ? colouring->colouring.part_count() : 0);
   summary.add("threads", statistics.threads);
   summary.add("frames", simulation.frames);
   summary.add("substeps", simulation.substeps);

@@ -21,7 +21,10 @@
 // n×n×4n-cell FEM bar (n = 10 … 100, about as many particles as the cloths). Counters as above
 // plus particles, constraints and model_bytes_per_second (projections/s × bytes/projection).
 // Only one size scene is kept in memory at a time (the 2048² cloth takes gigabytes).
-// solver_size_separate/gs/<largest size>: the same with ParticleLayout::separate.
+// solver_size_separate/gs/<largest size>: the same with ParticleLayout::separate;
+// solver_size_part_major/gs/<largest size>: with SweepOrder::part_major on METIS parts of
+// 16,384 particles. solver_order/<order>/<strategy>/<scene>: both sweep orders on the same
+// METIS colourings.
 //
 // Traffic model, bytes a projection must move between memory and the core when nothing is
 // reused from cache: for each of its N particles, x, y, z and inverse mass gathered (4 reals)
@@ -34,6 +37,7 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <optional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -123,11 +127,13 @@ const TimedColouring& colouring(const std::string& scene_name, const std::string
 
 void run_solver(benchmark::State& state, SolverMode mode, const std::string& scene_name,
                 const std::string& strategy,
-                ParticleLayout layout = kDefaultParticleLayout) {
+                ParticleLayout layout = kDefaultParticleLayout,
+                SweepOrder order = SweepOrder::colour_major) {
   const Model& model = scene(scene_name);
   SolverSettings settings;
   settings.mode = mode;
   settings.particle_layout = layout;
+  settings.sweep_order = order;
   settings.threads = std::size_t(state.range(0));
   settings.iterations = 1;
   settings.substeps = 1;
@@ -240,6 +246,20 @@ void register_benchmarks() {
           });
       b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(1)->Arg(2);
     }
+  // Part-major against colour-major on the same METIS colourings (part sizes: 4,096 and
+  // 16,384 particles, 64 and 256 KiB of interleaved floats, against L2; 65,536, the default).
+  for (const SweepOrder order : {SweepOrder::colour_major, SweepOrder::part_major})
+    for (const char* strategy : {"metis@4096", "metis@16384", "metis"})
+      for (const char* scene_name : {"cloth256", "cloth1024", "tetbar200k"}) {
+        const std::string name = "solver_order/" + std::string(sweep_order_name(order)) + "/" +
+                                 strategy + "/" + scene_name;
+        auto* b = benchmark::RegisterBenchmark(
+            name.c_str(), [order, strategy, scene_name](benchmark::State& state) {
+              run_solver(state, SolverMode::gs, scene_name, strategy, kDefaultParticleLayout,
+                         order);
+            });
+        b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(1)->Arg(2);
+      }
   for (const char* strategy : {"greedy", "greedy+locality", "stencil", "stencil+locality",
                                "dsatur", "random", "metis", "metis@1024", "metis@4096",
                                "metis@16384"})
@@ -259,9 +279,16 @@ struct SizeScene {
   std::string name;
   std::unique_ptr<Model> model;
   Colouring colouring;
+  /// metis with kPartMajorParticlesPerPart, made on first use (SweepOrder::part_major).
+  std::optional<Colouring> part_colouring;
 };
 
-const SizeScene& size_scene(const std::string& kind, std::size_t size) {
+/// Part size of the part-major size benchmark: 16,384 particles, 256 KiB of interleaved
+/// floats, which stay in a core's L2 while its colours sweep (solver_order measured 4,096,
+/// 16,384 and 65,536).
+constexpr std::size_t kPartMajorParticlesPerPart = 16384;
+
+SizeScene& size_scene(const std::string& kind, std::size_t size) {
   static SizeScene current;
   const std::string name = kind + ":" + std::to_string(size);
   if (current.name != name) {
@@ -278,15 +305,22 @@ const SizeScene& size_scene(const std::string& kind, std::size_t size) {
 }
 
 void BM_SolverSize(benchmark::State& state, const std::string& kind, std::size_t size,
-                   ParticleLayout layout = kDefaultParticleLayout) {
-  const SizeScene& scene = size_scene(kind, size);
+                   ParticleLayout layout = kDefaultParticleLayout,
+                   SweepOrder order = SweepOrder::colour_major) {
+  SizeScene& scene = size_scene(kind, size);
+  if (order == SweepOrder::part_major && !scene.part_colouring)
+    scene.part_colouring = test::colour_model(
+        *scene.model, "metis", ColouringOptions{.particles_per_part = kPartMajorParticlesPerPart});
   SolverSettings settings;
   settings.particle_layout = layout;
+  settings.sweep_order = order;
   settings.threads = std::size_t(state.range(0));
   settings.iterations = 1;
   settings.report_residuals = false;
   settings.check_finite = false;
-  Solver solver(*scene.model, scene.colouring, settings);
+  Solver solver(*scene.model,
+                order == SweepOrder::part_major ? *scene.part_colouring : scene.colouring,
+                settings);
   solver.step();
   for (auto _ : state) solver.project(1, settings.time_step);
   const auto constraints = std::int64_t(scene.model->constraints.size());
@@ -325,6 +359,15 @@ void register_size_benchmarks() {
             BM_SolverSize(state, scene_kind, size, ParticleLayout::separate);
           });
       separate->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(1);
+      // And part-major (metis parts of kPartMajorParticlesPerPart): cache blocking across
+      // colours.
+      auto* part_major = benchmark::RegisterBenchmark(
+          ("solver_size_part_major/gs/" + scene_kind + ":" + std::to_string(size)).c_str(),
+          [scene_kind, size](benchmark::State& state) {
+            BM_SolverSize(state, scene_kind, size, kDefaultParticleLayout, SweepOrder::part_major);
+          });
+      part_major->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(1);
+      if (hardware_threads > 1) part_major->Arg(hardware_threads);
     }
 }
 

@@ -155,4 +155,17 @@ void Colouring::set_particle_order(std::vector<ParticleIndex> new_to_old) {
   particle_old_to_new_ = std::move(old_to_new);
 }
 
+void Colouring::set_parts(std::vector<std::uint32_t> part_of_constraint, std::size_t part_count) {
+  if (part_of_constraint.size() != constraint_count())
+    throw InvalidInput("colouring: parts name " + std::to_string(part_of_constraint.size()) +
+                       " constraints, the colouring has " + std::to_string(constraint_count()));
+  for (std::size_t c = 0; c < part_of_constraint.size(); ++c)
+    if (part_of_constraint[c] > part_count)
+      throw InvalidInput("colouring: constraint " + std::to_string(c) + " is in part " +
+                         std::to_string(part_of_constraint[c]) + " of " +
+                         std::to_string(part_count));
+  part_of_constraint_ = std::move(part_of_constraint);
+  part_count_ = part_count;
+}
+
 }  // namespace tessera

@@ -134,6 +134,7 @@ class MetisStrategy final : public ColouringStrategy {
           static_cast<ParticleIndex>(p);
     }
     colouring.set_particle_order(std::move(new_to_old));
+    colouring.set_parts(std::move(part_of_constraint), parts);
     return colouring;
   }
 };

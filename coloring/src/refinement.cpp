@@ -59,6 +59,10 @@ Colouring rebuild(const ConstraintGraph& graph, const Colouring& original, std::
   Colouring result = Colouring::from_colours(std::move(colours), original.constraints_by_colour());
   if (original.renumbers_particles())
     result.set_particle_order({original.particle_new_to_old().begin(), original.particle_new_to_old().end()});
+  // Parts say which particles a constraint touches, not its colour: they carry over.
+  if (original.has_parts())
+    result.set_parts({original.part_of_constraint().begin(), original.part_of_constraint().end()},
+                     original.part_count());
   return result;
 }
 

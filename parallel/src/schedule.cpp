@@ -2,7 +2,9 @@
 //
 //   place_by_colour      per family, the model's constraint each scheduled slot takes
 //                        (kPadding for the gaps that align each colour to kMaxLanes), or its
-//                        place in the Jacobi set's list; the phases' blocks
+//                        place in the Jacobi set's list; the phases' blocks (place_by_part
+//                        for SweepOrder::part_major: each part's colours first, one block per
+//                        colour and family, then the crossing constraints' phases)
 //   reorder_batch        every batch gathered through its list (batch_reorder.hpp)
 //   build_jacobi_set     the Jacobi set and its incidences (jacobi_set.cpp)
 //   build_stages         the mode's stage list (stage.hpp)
@@ -40,6 +42,10 @@ ScheduleOptions checked(ScheduleOptions options) {
     throw InvalidInput("schedule: block size must be at least 1 constraint");
   options.block_size = round_up(options.block_size, kMaxLanes);
   options.threads = worker_threads(options.threads);
+  if (options.sweep_order == SweepOrder::part_major && options.mode != SolverMode::gs &&
+      options.mode != SolverMode::hybrid)
+    throw InvalidInput("schedule: sweep order part-major needs mode gs or hybrid (mode " +
+                       std::string(solver_mode_name(options.mode)) + " has no colour phases)");
   return options;
 }
 
@@ -86,12 +92,21 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
     throw InvalidInput("schedule: the colouring colours " +
                        std::to_string(colouring->constraint_count()) +
                        " constraints, the model has " + std::to_string(constraint_count()));
+  if (options_.sweep_order == SweepOrder::part_major && !colouring->has_parts())
+    throw InvalidInput("schedule: sweep order part-major needs a colouring with parts "
+                       "(strategy metis)");
   const std::size_t particle_count = model.particles.size();
   take_particle_order(*colouring, particle_count);
 
   SourceLists& coloured_source = coloured_source_;
   SourceLists& jacobi_source = jacobi_source_;
-  place_by_colour(*colouring, coloured_source, jacobi_source);
+  if (options_.sweep_order == SweepOrder::part_major)
+    place_by_part(model, *colouring, coloured_source, jacobi_source);
+  else
+    place_by_colour(*colouring, coloured_source, jacobi_source);
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
+    if (std::max(coloured_source[f].size(), jacobi_source[f].size()) >= kMostConstraintsPerFamily)
+      throw InvalidInput("schedule: more than 2^30 constraints in one family");
 
   const auto renumber = [&](std::size_t, std::size_t, ParticleIndex p) {
     return scheduled_particle(p);
@@ -140,51 +155,119 @@ void Schedule::take_particle_order(const Colouring& colouring, std::size_t parti
                      colouring.particle_old_to_new().end());
 }
 
+namespace {
+
+/// The family of global constraint c, given each family's first id.
+std::size_t family_of(std::span<const ConstraintIndex> family_first, ConstraintIndex c) {
+  std::size_t f = 0;
+  while (c >= family_first[f + 1]) ++f;
+  return f;
+}
+
+}  // namespace
+
+void Schedule::append_group(const SourceLists& members, SourceLists& coloured, bool split) {
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+    if (members[f].empty()) continue;
+    auto& source = coloured[f];
+    source.resize(round_up(source.size(), kMaxLanes), kPadding);
+    const std::size_t begin = source.size();
+    for (const std::uint32_t local : members[f]) {
+      remap_[f][local] = {false, std::uint32_t(source.size())};
+      source.push_back(local);
+    }
+    const ScheduleBlock range{ConstraintFamily(f), std::uint32_t(begin),
+                              std::uint32_t(source.size())};
+    ranges_[f].push_back(range);
+    if (split) detail::split_into_blocks(range.family, range.begin, range.end, options_, blocks_);
+    else blocks_.push_back(range);
+  }
+}
+
+void Schedule::append_phase(const SourceLists& members, std::size_t size, bool to_jacobi,
+                            SourceLists& coloured, SourceLists& jacobi) {
+  if (to_jacobi) {
+    // Jacobi slots are known only once build_jacobi_set has sorted the set.
+    for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
+      jacobi[f].insert(jacobi[f].end(), members[f].begin(), members[f].end());
+    return;
+  }
+  append_group(members, coloured, true);
+  phase_offsets_.push_back(blocks_.size());
+  phase_sizes_.push_back(size);
+}
+
 void Schedule::place_by_colour(const Colouring& colouring, SourceLists& coloured,
                                SourceLists& jacobi) {
-  const auto family_of = [&](ConstraintIndex c) {
-    std::size_t f = 0;
-    while (c >= family_first_[f + 1]) ++f;
-    return f;
-  };
   SourceLists members;
   phase_offsets_.push_back(0);
   for (Colour k = 0; k < colouring.colour_count(); ++k) {
     const auto colour = colouring.constraints_of(k);
-    const bool to_jacobi = options_.mode == SolverMode::jacobi ||
-                           (options_.mode == SolverMode::hybrid &&
-                            colour.size() < options_.hybrid_threshold);
     for (auto& m : members) m.clear();
     for (const ConstraintIndex c : colour) {
-      const std::size_t f = family_of(c);
+      const std::size_t f = family_of(family_first_, c);
       members[f].push_back(c - family_first_[f]);
     }
-    for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
-      if (members[f].empty()) continue;
-      if (to_jacobi) {
-        // Jacobi slots are known only once build_jacobi_set has sorted the set.
-        jacobi[f].insert(jacobi[f].end(), members[f].begin(), members[f].end());
-        continue;
-      }
-      auto& source = coloured[f];
-      source.resize(round_up(source.size(), kMaxLanes), kPadding);
-      const std::size_t begin = source.size();
-      for (const std::uint32_t local : members[f]) {
-        remap_[f][local] = {false, std::uint32_t(source.size())};
-        source.push_back(local);
-      }
-      const std::size_t end = source.size();
-      ranges_[f].push_back({ConstraintFamily(f), std::uint32_t(begin), std::uint32_t(end)});
-      detail::split_into_blocks(ConstraintFamily(f), begin, end, options_, blocks_);
-    }
-    if (!to_jacobi) {
-      phase_offsets_.push_back(blocks_.size());
-      phase_sizes_.push_back(colour.size());
+    append_phase(members, colour.size(), to_jacobi(colour.size()), coloured, jacobi);
+  }
+}
+
+// Part-major: every part's interior constraints colour after colour (one block per colour and
+// family: the part is one worker's), then the crossing constraints as colour phases. A part's
+// blocks run while other parts' run, so the colouring's claim that its interior constraints
+// share no movable particle with another part's is checked here: a wrong claim would be a race.
+void Schedule::place_by_part(const Model& model, const Colouring& colouring,
+                             SourceLists& coloured, SourceLists& jacobi) {
+  const std::size_t parts = colouring.part_count();
+  const auto part_of = colouring.part_of_constraint();
+  constexpr std::uint32_t kNoOwner = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> owner(model.particles.size(), kNoOwner);
+  const ConstraintGraph graph = constraint_graph(model);
+  for (ConstraintIndex c = 0; c < constraint_count(); ++c) {
+    const std::uint32_t part = part_of[c];
+    if (part == parts) continue;
+    for (const ParticleIndex p : graph.particles_of(c)) {
+      if (owner[p] == kNoOwner) owner[p] = part;
+      else if (owner[p] != part)
+        throw InvalidInput("schedule: the colouring puts constraint " + std::to_string(c) +
+                           " in part " + std::to_string(part) + ", but its particle " +
+                           std::to_string(p) + " is in part " + std::to_string(owner[p]) +
+                           " (a part's constraints may share movable particles with no other "
+                           "part's)");
     }
   }
-  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
-    if (std::max(coloured[f].size(), jacobi[f].size()) >= kMostConstraintsPerFamily)
-      throw InvalidInput("schedule: more than 2^30 constraints in one family");
+  // Each part's members colour after colour, then the crossing ones (bucket `parts`).
+  std::vector<std::vector<ConstraintIndex>> bucket(parts + 1);
+  std::vector<std::vector<std::uint32_t>> colour_start(parts + 1);
+  for (Colour k = 0; k < colouring.colour_count(); ++k) {
+    for (std::size_t b = 0; b <= parts; ++b)
+      colour_start[b].push_back(std::uint32_t(bucket[b].size()));
+    for (const ConstraintIndex c : colouring.constraints_of(k)) bucket[part_of[c]].push_back(c);
+  }
+  for (std::size_t b = 0; b <= parts; ++b)
+    colour_start[b].push_back(std::uint32_t(bucket[b].size()));
+
+  SourceLists members;
+  const auto gather = [&](std::size_t b, Colour k) {
+    for (auto& m : members) m.clear();
+    for (std::size_t i = colour_start[b][k]; i < colour_start[b][k + 1]; ++i) {
+      const ConstraintIndex c = bucket[b][i];
+      const std::size_t f = family_of(family_first_, c);
+      members[f].push_back(c - family_first_[f]);
+    }
+    return colour_start[b][k + 1] - colour_start[b][k];
+  };
+  part_offsets_.push_back(0);
+  for (std::size_t part = 0; part < parts; ++part) {
+    for (Colour k = 0; k < colouring.colour_count(); ++k)
+      if (gather(part, k) != 0) append_group(members, coloured, false);
+    part_offsets_.push_back(blocks_.size());
+  }
+  phase_offsets_.push_back(blocks_.size());
+  for (Colour k = 0; k < colouring.colour_count(); ++k) {
+    const std::size_t size = gather(parts, k);
+    if (size != 0) append_phase(members, size, to_jacobi(size), coloured, jacobi);
+  }
 }
 
 void Schedule::build_stages() {
@@ -202,6 +285,13 @@ void Schedule::build_stages() {
     if (has_velocity_pass(blocks_))
       velocity_stages_.push_back({StageKind::velocity_pass, StageSet::coloured, first, last});
     return;
+  }
+  if (part_count() != 0) {
+    const Stage parts{StageKind::part_sweep, StageSet::coloured, 0, std::uint32_t(part_count())};
+    iteration_stages_.push_back(parts);
+    if (has_velocity_pass({blocks_.data(), blocks_.data() + part_offsets_.back()}))
+      velocity_stages_.push_back({StageKind::part_velocity_pass, StageSet::coloured, 0,
+                                  parts.last_block});
   }
   for (std::size_t phase = 0; phase < phase_count(); ++phase) {
     const Stage stage{StageKind::coloured_phase, StageSet::coloured,

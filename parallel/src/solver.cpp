@@ -144,7 +144,7 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
       settings_.mode == SolverMode::sequential ? 1 : worker_threads(settings_.threads);
   schedule_ = Schedule(model, &colouring,
                        {settings_.mode, settings_.block_size, settings_.hybrid_threshold, threads,
-                        settings_.sequential_order});
+                        settings_.sequential_order, settings_.sweep_order});
   state_ = scheduled_particles(model.particles, schedule_);
   jacobi_work_.bind(schedule_.jacobi());
   if (settings_.chebyshev && settings_.mode == SolverMode::jacobi)
@@ -282,6 +282,22 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
                      : stage.set == StageSet::contacts ? contacts_work_
                                                        : dynamic_work_;
   switch (stage.kind) {
+    case StageKind::part_sweep:
+    case StageKind::part_velocity_pass: {
+      // One worker per part, the part's blocks in order (its colours one after another).
+      const ParticleArrays arrays =
+          stage.kind == StageKind::part_sweep ? sweep_arrays() : velocity_arrays_of(state_);
+      parallel_chunks(stage.last_block - stage.first_block, 1, [&](std::size_t first, std::size_t last) {
+        for (std::size_t part = first; part < last; ++part)
+          for (const ScheduleBlock& b : schedule_.part_blocks(stage.first_block + part)) {
+            if (stage.kind == StageKind::part_sweep)
+              kProjectBlock[std::size_t(b.family)](arrays, sets, b.begin, b.end, projection);
+            else
+              kVelocityBlock[std::size_t(b.family)](arrays, sets, b.begin, b.end, projection.dt);
+          }
+      });
+      return;
+    }
     case StageKind::coloured_phase: {
       const ParticleArrays particles = sweep_arrays();
       parallel_chunks(blocks.size(), 1, [&](std::size_t first, std::size_t last) {
@@ -438,6 +454,9 @@ void Solver::iterate(const ProjectionSettings& projection, std::size_t iteration
 }
 
 void Solver::set_phase_hook(PhaseHook hook) {
+  if (hook && schedule_.part_count() != 0)
+    throw InvalidInput("set_phase_hook: sweep order part-major sweeps the parts' colours "
+                       "without a phase boundary between them (colour-major has one)");
   if (hook && settings_.mode != SolverMode::gs)
     throw InvalidInput(std::string("set_phase_hook: mode ") +
                        std::string(solver_mode_name(settings_.mode)) +

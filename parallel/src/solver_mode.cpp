@@ -1,4 +1,4 @@
-// Solver mode, sequential order and contact scheduling names (solver_mode.hpp).
+// Solver mode, sequential order, contact scheduling, particle layout and sweep order names (solver_mode.hpp).
 #include <tessera/parallel/solver_mode.hpp>
 
 #include <string>
@@ -77,6 +77,19 @@ std::string_view particle_layout_name(ParticleLayout layout) {
 ParticleLayout parse_particle_layout(std::string_view name) {
   constexpr ParticleLayout kLayouts[] = {ParticleLayout::separate, ParticleLayout::interleaved};
   return parse_named(name, kLayouts, particle_layout_name, "particle layout");
+}
+
+std::string_view sweep_order_name(SweepOrder order) {
+  switch (order) {
+    case SweepOrder::colour_major: return "colour-major";
+    case SweepOrder::part_major: return "part-major";
+  }
+  return "unknown";
+}
+
+SweepOrder parse_sweep_order(std::string_view name) {
+  constexpr SweepOrder kOrders[] = {SweepOrder::colour_major, SweepOrder::part_major};
+  return parse_named(name, kOrders, sweep_order_name, "sweep order");
 }
 
 }  // namespace tessera

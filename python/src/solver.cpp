@@ -80,7 +80,8 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
                              bool report_residuals, bool record_convergence, bool check_finite,
                              double divergence_rms, const std::string& sequential_order,
                              const std::string& contact_scheduling,
-                             const std::string& particle_layout) {
+                             const std::string& particle_layout,
+                             const std::string& sweep_order) {
   SolverSettings s;
   s.mode = parse_solver_mode(mode);
   s.threads = threads;
@@ -107,6 +108,7 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
   s.sequential_order = parse_sequential_order(sequential_order);
   s.contact_scheduling = parse_contact_scheduling(contact_scheduling);
   s.particle_layout = parse_particle_layout(particle_layout);
+  s.sweep_order = parse_sweep_order(sweep_order);
   return s;
 }
 
@@ -128,12 +130,12 @@ void bind_solver(py::module_& m) {
                        std::size_t hybrid_threshold, bool report_residuals,
                        bool record_convergence, bool check_finite, double divergence_rms,
                        const std::string& sequential_order, const std::string& contact_scheduling,
-                       const std::string& particle_layout) {
+                       const std::string& particle_layout, const std::string& sweep_order) {
              const SolverSettings settings = make_settings(
                  mode, threads, semantics, time_step, substeps, iterations, gravity,
                  velocity_damping, jacobi_relaxation, block_size, hybrid_threshold,
                  report_residuals, record_convergence, check_finite, divergence_rms,
-                 sequential_order, contact_scheduling, particle_layout);
+                 sequential_order, contact_scheduling, particle_layout, sweep_order);
              if (settings.mode == SolverMode::sequential && !colouring) return Solver(model, settings);
              if (!colouring)
                throw InvalidInput("solver: mode " + mode +
@@ -158,7 +160,8 @@ void bind_solver(py::module_& m) {
            py::arg("sequential_order") = "groups",
            py::arg("contact_scheduling") =
                std::string(contact_scheduling_name(kDefaultContactScheduling)),
-           py::arg("particle_layout") = std::string(particle_layout_name(kDefaultParticleLayout)))
+           py::arg("particle_layout") = std::string(particle_layout_name(kDefaultParticleLayout)),
+           py::arg("sweep_order") = std::string(sweep_order_name(SweepOrder::colour_major)))
       .def(
           "step",
           [](Solver& solver, std::size_t steps) {

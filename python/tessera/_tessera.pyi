@@ -261,6 +261,7 @@ class Solver:
         sequential_order: str = "groups",
         contact_scheduling: str = "coloured",
         particle_layout: str = "interleaved",
+        sweep_order: str = "colour-major",
     ) -> None: ...
     def step(self, steps: int = 1) -> None:
         """`steps` time steps; raises NumericalFailure (state restored). Releases the GIL."""

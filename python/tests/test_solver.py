@@ -40,6 +40,23 @@ def test_both_particle_layouts_give_the_same_state(tool):
         tessera.Solver(scene.model, colouring, particle_layout="aos")
 
 
+def test_part_major_sweeps_as_the_tool_does_for_any_thread_count(tool):
+    scene = tessera.scene("cloth:40")
+    colouring = tessera.colour(scene.model, "metis", locality=True, particles_per_part=256)
+    hashes = set()
+    for threads in (1, 2):
+        solver = tessera.Solver(scene.model, colouring, threads=threads,
+                                **(scene.solver_settings() | {"sweep_order": "part-major"}))
+        solver.step(3)
+        hashes.add(solver.state_hash())
+    expected = tool("run", "cloth:40", "--frames", "3", "--strategy", "metis",
+                    "--particles-per-part", "256", "--sweep-order", "part-major")
+    assert hashes == {expected["state_hash"]}
+    assert expected["sweep_order"] == "part-major" and expected["parts"] >= 4
+    with pytest.raises(ValueError, match="needs a colouring with parts"):
+        tessera.Solver(scene.model, tessera.colour(scene.model, "greedy"), sweep_order="part-major")
+
+
 def test_a_model_from_arrays_solves_as_the_scene_it_copies():
     scene = tessera.scene("cloth:10")
     model = tessera.Model(scene.model.positions, scene.model.inverse_masses)

@@ -126,10 +126,41 @@ TEST_F(Cli, ParticleLayoutChangesTheSweepsButNotTheResult) {
   EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
 }
 
+TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountAndNeedsParts) {
+  const std::vector<std::string> part_major = {"run", "cloth:40", "--frames", "3",
+                                               "--strategy", "metis", "--particles-per-part",
+                                               "200", "--sweep-order", "part-major"};
+  auto two = part_major;
+  two.insert(two.end(), {"--threads", "2"});
+  auto one = part_major;
+  one.insert(one.end(), {"--threads", "1"});
+  const Json a = run_json(one), b = run_json(two);
+  EXPECT_EQ(a["sweep_order"], "part-major");
+  EXPECT_GE(a["parts"].get<int>(), 4);
+  EXPECT_EQ(a["state_hash"], b["state_hash"]);
+  const Json colour_major = run_json({"run", "cloth:40", "--frames", "3", "--strategy", "metis",
+                                      "--particles-per-part", "200"});
+  EXPECT_EQ(colour_major["sweep_order"], "colour-major") << "the default";
+  EXPECT_NE(colour_major["state_hash"], a["state_hash"]) << "another Gauss-Seidel order";
+  const auto expect_clear_error = [&](const std::vector<std::string>& args, const char* words) {
+    const Outcome bad = run(args);
+    EXPECT_EQ(bad.exit_code, 2) << bad.err;
+    EXPECT_NE(bad.err.find(words), std::string::npos) << bad.err;
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  };
+  expect_clear_error({"run", "cloth:12", "--frames", "1", "--sweep-order", "part-major"},
+                     "needs a colouring with parts");
+  expect_clear_error({"run", "cloth:12", "--frames", "1", "--sweep-order", "diagonal"},
+                     "unknown sweep order 'diagonal'");
+  expect_clear_error({"run", "cloth:12", "--frames", "1", "--particles-per-part", "64"},
+                     "strategy stencil has no parts");
+}
+
 TEST_F(Cli, RunSummaryHoldsEveryKey) {
   const Json summary = run_json({"run", "cloth:12x10", "--frames", "3", "--threads", "2"});
   for (const char* key : {"scene", "particles", "constraints", "colours", "colour_lower_bound",
-                          "strategy", "mode", "particle_layout", "threads", "frames",
+                          "strategy", "mode", "particle_layout", "sweep_order", "parts",
+                          "threads", "frames",
                           "substeps", "iterations",
                           "seconds_total", "seconds_coloring", "seconds_projection",
                           "projections_per_second", "residual_rms_initial",

@@ -55,12 +55,26 @@ class Colouring {
   /// tessera::InvalidInput otherwise).
   void set_particle_order(std::vector<ParticleIndex> new_to_old);
 
+  /// Parts (strategy metis; none for the others): a part's interior constraints touch no
+  /// movable particle outside the part, so different parts can be swept at the same time
+  /// while each sweeps its own colours one after another (SweepOrder::part_major);
+  /// part_of_constraint()[c] is c's part, or part_count() for a crossing constraint (touching
+  /// several parts, or no movable particle). The schedule checks the claim against the model.
+  bool has_parts() const { return !part_of_constraint_.empty(); }
+  std::size_t part_count() const { return part_count_; }
+  std::span<const std::uint32_t> part_of_constraint() const { return part_of_constraint_; }
+  /// Sets the parts (one entry per constraint, each at most part_count; throws
+  /// tessera::InvalidInput otherwise).
+  void set_parts(std::vector<std::uint32_t> part_of_constraint, std::size_t part_count);
+
  private:
   std::vector<Colour> colour_of_;
   std::vector<std::uint32_t> offsets_;
   std::vector<ConstraintIndex> constraints_by_colour_;
   std::vector<ParticleIndex> particle_new_to_old_;
   std::vector<ParticleIndex> particle_old_to_new_;
+  std::vector<std::uint32_t> part_of_constraint_;
+  std::size_t part_count_ = 0;
 };
 
 }  // namespace tessera

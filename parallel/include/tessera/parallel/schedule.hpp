@@ -64,6 +64,9 @@ struct ScheduleOptions {
   std::size_t threads = 1;
   /// Mode sequential: the order of the sweep.
   SequentialOrder sequential_order = SequentialOrder::groups;
+  /// Modes gs and hybrid: colour after colour, or part after part (the colouring must have
+  /// parts, Colouring::has_parts; InvalidInput otherwise, or in another mode).
+  SweepOrder sweep_order = SweepOrder::colour_major;
 };
 
 /// Constraints [begin, end) of one family's scheduled batch: one unit of parallel work.
@@ -143,6 +146,13 @@ class Schedule {
   }
   /// Constraints of each phase.
   std::span<const std::size_t> phase_sizes() const { return phase_sizes_; }
+  /// SweepOrder::part_major: the parts, and each part's blocks (its interior constraints
+  /// colour after colour, one block per colour and family), at the front of blocks(); the
+  /// phases hold the crossing constraints. No parts otherwise.
+  std::size_t part_count() const { return part_offsets_.empty() ? 0 : part_offsets_.size() - 1; }
+  std::span<const ScheduleBlock> part_blocks(std::size_t part) const {
+    return {blocks_.data() + part_offsets_[part], blocks_.data() + part_offsets_[part + 1]};
+  }
   /// The ranges of real (not padding) constraints of a family in coloured(), ascending.
   std::span<const ScheduleBlock> coloured_ranges(ConstraintFamily family) const {
     return ranges_[std::size_t(family)];
@@ -181,13 +191,29 @@ class Schedule {
   void lay_out_in_input_order(const Model& model);
   void take_particle_order(const Colouring& colouring, std::size_t particle_count);
   void place_by_colour(const Colouring& colouring, SourceLists& coloured, SourceLists& jacobi);
+  void place_by_part(const Model& model, const Colouring& colouring, SourceLists& coloured,
+                     SourceLists& jacobi);
+  /// Appends one colour's (or one part's colour's) constraints, per family, to the coloured
+  /// batches, each family's run aligned to kMaxLanes; split: into parallel work blocks, else
+  /// one block per family.
+  void append_group(const SourceLists& members, SourceLists& coloured, bool split);
+  /// The phase of one colour's members: appended, or (to_jacobi) left for the Jacobi set.
+  void append_phase(const SourceLists& members, std::size_t size, bool to_jacobi,
+                    SourceLists& coloured, SourceLists& jacobi);
   void build_stages();
+
+  /// Mode hybrid: a colour this small goes to the Jacobi set; mode jacobi: every colour.
+  bool to_jacobi(std::size_t colour_size) const {
+    return options_.mode == SolverMode::jacobi ||
+           (options_.mode == SolverMode::hybrid && colour_size < options_.hybrid_threshold);
+  }
 
   ScheduleOptions options_;
   ConstraintSets coloured_;
   std::vector<ScheduleBlock> blocks_;
   std::vector<std::size_t> phase_offsets_;
   std::vector<std::size_t> phase_sizes_;
+  std::vector<std::size_t> part_offsets_;
   std::array<std::vector<ScheduleBlock>, kConstraintFamilyCount> ranges_;
   JacobiSet jacobi_;
   std::vector<ParticleIndex> new_to_old_, old_to_new_;

@@ -158,6 +158,9 @@ struct SolverSettings {
   ContactScheduling contact_scheduling = kDefaultContactScheduling;
   /// How the sweeps hold the particles (solver_mode.hpp); the same bits either way.
   ParticleLayout particle_layout = kDefaultParticleLayout;
+  /// Modes gs and hybrid: colour after colour, or part after part (solver_mode.hpp; needs a
+  /// colouring with parts, strategy metis).
+  SweepOrder sweep_order = SweepOrder::colour_major;
 };
 
 /// What the last step() measured.

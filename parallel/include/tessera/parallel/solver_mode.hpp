@@ -77,6 +77,24 @@ std::string_view particle_layout_name(ParticleLayout layout);
 /// The layout of that name; throws InvalidInput listing the names for any other.
 ParticleLayout parse_particle_layout(std::string_view name);
 
+/// The order a gs (or hybrid) iteration sweeps the coloured constraints in.
+enum class SweepOrder : std::uint8_t {
+  /// Colour after colour, each colour's blocks in parallel: a barrier per colour, and every
+  /// colour reaches across the whole particle array.
+  colour_major,
+  /// Part after part (a colouring with parts: strategy metis), the parts in parallel: each
+  /// worker sweeps every colour of its parts' interior constraints while those particles stay
+  /// in its cache, then the crossing constraints colour after colour as in colour_major. One
+  /// barrier for all the interior work; a different Gauss–Seidel order (interior before
+  /// crossing), the same for any thread count.
+  part_major,
+};
+
+/// "colour-major", "part-major".
+std::string_view sweep_order_name(SweepOrder order);
+/// The order of that name; throws InvalidInput listing the names for any other.
+SweepOrder parse_sweep_order(std::string_view name);
+
 /// Every mode, in declaration order.
 inline constexpr SolverMode kSolverModes[] = {SolverMode::gs, SolverMode::jacobi,
                                               SolverMode::hybrid, SolverMode::sequential};

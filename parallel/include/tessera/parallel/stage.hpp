@@ -3,6 +3,7 @@
 // constraints; one dispatcher (Solver::run_stage) runs any stage.
 //
 //   gs          coloured phase 0 │ coloured phase 1 │ ... │ (dynamic: Jacobi projection │ reduction)
+//   gs, part-major: part sweep (every part's interior colours) │ crossing phase 0 │ ... │ (dynamic ...)
 //   jacobi      Jacobi projection │ Jacobi reduction │ (dynamic ...)
 //   hybrid      coloured phases of the large colours │ Jacobi projection │ reduction │ (dynamic ...)
 //   sequential  sequential sweep (every family range in input order) │ (dynamic: sequential sweep)
@@ -33,6 +34,12 @@ enum class StageKind : std::uint8_t {
   /// The velocity solve of the blocks' families that have one (in parallel for a coloured
   /// set, one block after another otherwise: a Jacobi set's constraints may share particles).
   velocity_pass,
+  /// Parts [first_block, last_block) of the schedule (Schedule::part_blocks) in parallel, each
+  /// part's blocks (its interior constraints, colour after colour) one after another on one
+  /// worker (SweepOrder::part_major).
+  part_sweep,
+  /// The velocity solve of part_sweep's blocks, part by part the same way.
+  part_velocity_pass,
 };
 
 /// Which batches a stage works on.
@@ -54,7 +61,8 @@ enum class StageSet : std::uint8_t {
 struct Stage {
   StageKind kind;
   StageSet set;
-  /// Blocks [first_block, last_block) of the set (unused by jacobi_reduction).
+  /// Blocks [first_block, last_block) of the set (unused by jacobi_reduction; parts for
+  /// part_sweep and part_velocity_pass).
   std::uint32_t first_block;
   std::uint32_t last_block;
 };

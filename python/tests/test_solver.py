@@ -45,8 +45,8 @@ def test_part_major_sweeps_as_the_tool_does_for_any_thread_count(tool):
     colouring = tessera.colour(scene.model, "metis", locality=True, particles_per_part=256)
     hashes = set()
     for threads in (1, 2):
-        solver = tessera.Solver(scene.model, colouring, threads=threads,
-                                **(scene.solver_settings() | {"sweep_order": "part-major"}))
+        settings = scene.solver_settings() | {"sweep_order": "part-major", "threads": threads}
+        solver = tessera.Solver(scene.model, colouring, **settings)
         solver.step(3)
         hashes.add(solver.state_hash())
     expected = tool("run", "cloth:40", "--frames", "3", "--strategy", "metis",

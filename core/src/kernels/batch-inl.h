@@ -218,11 +218,34 @@ HWY_INLINE void store_particle_pairs(Real* xyzw, const ParticleIndex* indices,
 }
 #endif
 
+/// The portable scatter, for either layout: lane after lane of `write`, x, y, z stored at the
+/// particle's place (ParticleArrays::stride).
+HWY_INLINE void scatter_lane_by_lane(const ParticleArrays& particles, const ParticleIndex* indices,
+                                     RealLanes x, RealLanes y, RealLanes z,
+                                     const LaneMask& write) {
+  const RealTag d;
+  std::uint64_t bits = mask_bits(write);
+  if (bits == 0) return;
+  HWY_ALIGN Real x_lanes[kMaxLanes], y_lanes[kMaxLanes], z_lanes[kMaxLanes];
+  hn::Store(x, d, x_lanes);
+  hn::Store(y, d, y_lanes);
+  hn::Store(z, d, z_lanes);
+  while (bits != 0) {
+    const int lane = __builtin_ctzll(bits);
+    const std::size_t at = std::size_t(indices[lane]) * particles.stride;
+    particles.x[at] = x_lanes[lane];
+    particles.y[at] = y_lanes[lane];
+    particles.z[at] = z_lanes[lane];
+    bits &= bits - 1;
+  }
+}
+
 /// The interleaved layout's scatter: the inverse transpose, one whole-particle store per lane
-/// of `write` (w is stored back unchanged).
-HWY_INLINE void scatter_interleaved(Real* xyzw, const ParticleIndex* indices, RealLanes x,
-                                    RealLanes y, RealLanes z, RealLanes w,
+/// of `write` (w is stored back unchanged); lane by lane on targets without a transpose.
+HWY_INLINE void scatter_interleaved(const ParticleArrays& particles, const ParticleIndex* indices,
+                                    RealLanes x, RealLanes y, RealLanes z, RealLanes w,
                                     const LaneMask& write) {
+  Real* const xyzw = particles.x;
 #if TESSERA_TARGET_AVX512 && !TESSERA_DOUBLE_PRECISION
   const std::uint32_t bits = std::uint32_t(write.raw);
   if (bits == 0) return;
@@ -253,22 +276,9 @@ HWY_INLINE void scatter_interleaved(Real* xyzw, const ParticleIndex* indices, Re
                           _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
   store_particle_lanes(xyzw, indices, quad, bits, std::make_integer_sequence<int, 8>());
 #else
+  (void)xyzw;
   (void)w;
-  const RealTag d;
-  std::uint64_t bits = mask_bits(write);
-  if (bits == 0) return;
-  HWY_ALIGN Real x_lanes[kMaxLanes], y_lanes[kMaxLanes], z_lanes[kMaxLanes];
-  hn::Store(x, d, x_lanes);
-  hn::Store(y, d, y_lanes);
-  hn::Store(z, d, z_lanes);
-  while (bits != 0) {
-    const int lane = __builtin_ctzll(bits);
-    Real* to = xyzw + 4 * std::size_t(indices[lane]);
-    to[0] = x_lanes[lane];
-    to[1] = y_lanes[lane];
-    to[2] = z_lanes[lane];
-    bits &= bits - 1;
-  }
+  scatter_lane_by_lane(particles, indices, x, y, z, write);
 #endif
 }
 
@@ -284,7 +294,7 @@ HWY_INLINE void scatter_corrected(ParticleArrays& particles, const ParticleIndex
   const RealLanes y = lanes.position.y + correction.y;
   const RealLanes z = lanes.position.z + correction.z;
   if (particles.interleaved())
-    return scatter_interleaved(particles.x, indices, x, y, z, lanes.inverse_mass, write);
+    return scatter_interleaved(particles, indices, x, y, z, lanes.inverse_mass, write);
 #if TESSERA_TARGET_AVX512 && TESSERA_DOUBLE_PRECISION
   const __m256i index = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(indices));
   _mm512_mask_i32scatter_pd(particles.x, write.raw, index, x.raw, 8);
@@ -296,20 +306,7 @@ HWY_INLINE void scatter_corrected(ParticleArrays& particles, const ParticleIndex
   _mm512_mask_i32scatter_ps(particles.y, write.raw, index, y.raw, 4);
   _mm512_mask_i32scatter_ps(particles.z, write.raw, index, z.raw, 4);
 #else
-  std::uint64_t bits = mask_bits(write);
-  if (bits == 0) return;
-  HWY_ALIGN Real x_lanes[kMaxLanes], y_lanes[kMaxLanes], z_lanes[kMaxLanes];
-  hn::Store(x, d, x_lanes);
-  hn::Store(y, d, y_lanes);
-  hn::Store(z, d, z_lanes);
-  while (bits != 0) {
-    const int lane = __builtin_ctzll(bits);
-    const ParticleIndex p = indices[lane];
-    particles.x[p] = x_lanes[lane];
-    particles.y[p] = y_lanes[lane];
-    particles.z[p] = z_lanes[lane];
-    bits &= bits - 1;
-  }
+  scatter_lane_by_lane(particles, indices, x, y, z, write);
 #endif
 }
 

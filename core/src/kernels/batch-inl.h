@@ -101,7 +101,7 @@ HWY_INLINE __m256 load_particle_quad(const Real* xyzw, const ParticleIndex* indi
 
 /// The interleaved layout's gather (see the top of this file).
 HWY_INLINE ParticleLanes gather_interleaved(const Real* xyzw, const ParticleIndex* indices) {
-  const RealTag d;
+  [[maybe_unused]] const RealTag d;  // the transposing paths need no tag
 #if TESSERA_TARGET_AVX512 && !TESSERA_DOUBLE_PRECISION
   const __m512 q0 = load_particle_quad<0>(xyzw, indices), q1 = load_particle_quad<1>(xyzw, indices);
   const __m512 q2 = load_particle_quad<2>(xyzw, indices), q3 = load_particle_quad<3>(xyzw, indices);

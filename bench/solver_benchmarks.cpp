@@ -128,9 +128,10 @@ const TimedColouring& colouring(const std::string& scene_name, const std::string
 void run_solver(benchmark::State& state, SolverMode mode, const std::string& scene_name,
                 const std::string& strategy,
                 ParticleLayout layout = kDefaultParticleLayout,
-                SweepOrder order = SweepOrder::colour_major) {
+                SweepOrder order = SweepOrder::colour_major, bool phase_regions = true) {
   const Model& model = scene(scene_name);
   SolverSettings settings;
+  settings.phase_regions = phase_regions;
   settings.mode = mode;
   settings.particle_layout = layout;
   settings.sweep_order = order;
@@ -245,6 +246,18 @@ void register_benchmarks() {
             run_solver(state, SolverMode::gs, scene_name, kDefaultStrategy, layout);
           });
       b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(1)->Arg(2);
+    }
+  // The phases of an iteration in one region with a spin barrier, or a parallel_for each.
+  for (const bool regions : {true, false})
+    for (const char* scene_name : scenes) {
+      const std::string name = std::string("solver_phases/") + (regions ? "region" : "parallel_for") +
+                               "/" + scene_name;
+      auto* b = benchmark::RegisterBenchmark(
+          name.c_str(), [regions, scene_name](benchmark::State& state) {
+            run_solver(state, SolverMode::gs, scene_name, kDefaultStrategy, kDefaultParticleLayout,
+                       SweepOrder::colour_major, regions);
+          });
+      b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(2);
     }
   // Part-major against colour-major on the same METIS colourings (part sizes: 4,096 and
   // 16,384 particles, 64 and 256 KiB of interleaved floats, against L2; 65,536, the default).

@@ -25,6 +25,7 @@
 #include <tessera/core/batch_reorder.hpp>
 #include "contact_colouring.hpp"
 #include "jacobi_set.hpp"
+#include "phase_region.hpp"
 #include "residual_sum.hpp"
 
 namespace tessera {
@@ -441,7 +442,21 @@ void Solver::iterate(const ProjectionSettings& projection, std::size_t iteration
                       : iteration == delay + 1 ? Real(2) / (Real(2) - rho2)
                                                : Real(4) / (Real(4) - rho2 * chebyshev_weight_);
   if (!phase_hook_) {
-    for (const Stage& stage : stages_) run_stage(stage, projection);
+    // Runs of coloured phases go to one parallel region each (phase_region.hpp).
+    const auto in_region = [](const Stage& stage) {
+      return stage.kind == StageKind::coloured_phase &&
+             (stage.set == StageSet::coloured || stage.set == StageSet::contact_colours);
+    };
+    for (std::size_t i = 0; i < stages_.size();) {
+      std::size_t end = i;
+      while (end < stages_.size() && in_region(stages_[end])) ++end;
+      if (settings_.phase_regions && end - i >= 2 && statistics_.threads > 1) {
+        run_phase_region(i, end, projection);
+        i = end;
+      } else {
+        run_stage(stages_[i++], projection);
+      }
+    }
     return;
   }
   phase_hook_(kBeforePhases, sweep_arrays());
@@ -451,6 +466,33 @@ void Solver::iterate(const ProjectionSettings& projection, std::size_t iteration
     if (stage.kind == StageKind::coloured_phase && stage.set == StageSet::coloured)
       phase_hook_(phase++, sweep_arrays());
   }
+}
+
+void Solver::run_phase_region(std::size_t first, std::size_t last,
+                              const ProjectionSettings& projection) {
+  const std::size_t shares = statistics_.threads;
+  detail::PhaseRegion region(last - first, shares);
+  const ParticleArrays particles = sweep_arrays();
+  const auto run_share = [&](std::size_t phase, std::size_t share) {
+    const Stage& stage = stages_[first + phase];
+    ConstraintSets& sets = batches_of(stage.set);
+    const auto blocks = blocks_of(stage);
+    // The share static_partitioner would give: contiguous, the same every iteration.
+    const std::size_t begin = blocks.size() * share / shares;
+    const std::size_t end = blocks.size() * (share + 1) / shares;
+    for (std::size_t b = begin; b < end; ++b)
+      kProjectBlock[std::size_t(blocks[b].family)](particles, sets, blocks[b].begin,
+                                                   blocks[b].end, projection);
+  };
+  arena_->execute([&] {
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, shares, 1),
+        [&](const tbb::blocked_range<std::size_t>& r) {
+          for (std::size_t share = r.begin(); share != r.end(); ++share)
+            region.run(share, run_share);
+        },
+        tbb::static_partitioner());
+  });
 }
 
 void Solver::set_phase_hook(PhaseHook hook) {

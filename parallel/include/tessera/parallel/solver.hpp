@@ -161,6 +161,10 @@ struct SolverSettings {
   /// Modes gs and hybrid: colour after colour, or part after part (solver_mode.hpp; needs a
   /// colouring with parts, strategy metis).
   SweepOrder sweep_order = SweepOrder::colour_major;
+  /// Consecutive coloured phases run in one parallel region per iteration, the threads
+  /// meeting at a spin barrier between colours (parallel/src/phase_region.hpp); false: a
+  /// parallel_for per phase. The same bits either way.
+  bool phase_regions = true;
 };
 
 /// What the last step() measured.
@@ -347,6 +351,8 @@ class Solver {
   std::span<const ScheduleBlock> blocks_of(const Stage& stage) const;
   /// The `iteration`th (1-based) iteration of a solve (a substep's or a project() call's).
   void iterate(const ProjectionSettings& projection, std::size_t iteration);
+  /// Coloured phases [first, last) of stages_ in one parallel region (phase_region.hpp).
+  void run_phase_region(std::size_t first, std::size_t last, const ProjectionSettings& projection);
   void jacobi_projection(JacobiSet& jacobi, JacobiWork& work,
                          std::span<const ScheduleBlock> blocks,
                          const ProjectionSettings& projection);

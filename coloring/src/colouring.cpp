@@ -166,6 +166,7 @@ void Colouring::set_parts(std::vector<std::uint32_t> part_of_constraint, std::si
                          std::to_string(part_count));
   part_of_constraint_ = std::move(part_of_constraint);
   part_count_ = part_count;
+  has_parts_ = true;
 }
 
 }  // namespace tessera

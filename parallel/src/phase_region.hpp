@@ -28,8 +28,10 @@
 
 namespace tessera::detail {
 
-/// Spins before a waiting thread runs a share nobody has claimed yet (about 20–50 µs).
-inline constexpr std::uint32_t kHelpAfterSpins = 4096;
+/// Pauses before a waiting thread runs a share nobody has claimed yet: about 10–100 µs by CPU
+/// (a pause is some 10 to 150 cycles), well past the microseconds threads that run take to
+/// arrive, short against a thread that never comes.
+inline constexpr std::uint32_t kHelpAfterSpins = 2048;
 
 inline void spin_pause() {
 #if defined(__x86_64__) || defined(_M_X64)
@@ -64,8 +66,13 @@ class PhaseRegion {
   template <class RunShare>
   void run_if_claimed(std::size_t phase, std::size_t share, RunShare& run_share) {
     if (claimed_[phase * shares_ + share].exchange(1, std::memory_order_acq_rel) != 0) return;
+    // Counted done even if it throws, so no thread waits for it forever (the exception then
+    // leaves the parallel_for).
+    struct Done {
+      std::atomic<std::uint32_t>& count;
+      ~Done() { count.fetch_add(1, std::memory_order_acq_rel); }
+    } done{done_[phase]};
     run_share(phase, share);
-    done_[phase].fetch_add(1, std::memory_order_acq_rel);
   }
 
   /// Until every share of `phase` is done; after kHelpAfterSpins, runs the unclaimed ones.

@@ -160,6 +160,10 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
   statistics_.constraints_per_family = model.constraints.sizes();
   statistics_.constraints = model.constraints.size();
   statistics_.coloured_phases = schedule_.phase_count();
+  statistics_.part_count = schedule_.part_count();
+  for (std::size_t part = 0; part < schedule_.part_count(); ++part)
+    for (const ScheduleBlock& block : schedule_.part_blocks(part))
+      statistics_.part_constraints += block.end - block.begin;
   statistics_.phase_sizes.assign(schedule_.phase_sizes().begin(), schedule_.phase_sizes().end());
   statistics_.jacobi_constraints = schedule_.jacobi().constraint_count;
 }
@@ -264,6 +268,8 @@ ConstraintSets& Solver::batches_of(StageSet set) {
 }
 
 std::span<const ScheduleBlock> Solver::blocks_of(const Stage& stage) const {
+  // A part stage's range names parts, not blocks (Schedule::part_blocks).
+  if (stage.kind == StageKind::part_sweep || stage.kind == StageKind::part_velocity_pass) return {};
   const std::vector<ScheduleBlock>* blocks = &dynamic_.blocks;
   if (stage.set == StageSet::jacobi) blocks = &schedule_.jacobi().blocks;
   if (stage.set == StageSet::contacts) blocks = &contacts_.blocks;

@@ -70,6 +70,22 @@ TEST(SweepOrder, PartMajorGivesTheSameBitsForAnyThreadCount) {
   }
 }
 
+TEST(SweepOrder, EveryConstraintIsInAPartOrAPhaseAndTheStatisticsSaySo) {
+  const Model cloth = test::cloth_model(40, 32);
+  const Colouring colouring = metis_colouring(cloth, 128);
+  Solver solver(cloth, colouring, settings_with(SweepOrder::part_major, 2));
+  const SolverStatistics& statistics = solver.statistics();
+  EXPECT_EQ(statistics.part_count, colouring.part_count());
+  std::size_t interior = 0;
+  for (const std::uint32_t part : colouring.part_of_constraint()) interior += part != colouring.part_count();
+  EXPECT_EQ(statistics.part_constraints, interior);
+  std::size_t in_phases = 0;
+  for (const std::size_t size : statistics.phase_sizes) in_phases += size;
+  EXPECT_EQ(statistics.part_constraints + in_phases + statistics.jacobi_constraints,
+            cloth.constraints.size());
+  EXPECT_GT(in_phases, 0u) << "some constraints cross parts";
+}
+
 TEST(SweepOrder, PartMajorConvergesLikeColourMajor) {
   // The same cloth swinging for 20 steps: the two orders of the same sweep leave residuals
   // within 10 % of each other and end within 1 % of the cloth's size of each other.

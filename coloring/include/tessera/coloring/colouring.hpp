@@ -60,7 +60,7 @@ class Colouring {
   /// while each sweeps its own colours one after another (SweepOrder::part_major);
   /// part_of_constraint()[c] is c's part, or part_count() for a crossing constraint (touching
   /// several parts, or no movable particle). The schedule checks the claim against the model.
-  bool has_parts() const { return !part_of_constraint_.empty(); }
+  bool has_parts() const { return has_parts_; }
   std::size_t part_count() const { return part_count_; }
   std::span<const std::uint32_t> part_of_constraint() const { return part_of_constraint_; }
   /// Sets the parts (one entry per constraint, each at most part_count; throws
@@ -75,6 +75,7 @@ class Colouring {
   std::vector<ParticleIndex> particle_old_to_new_;
   std::vector<std::uint32_t> part_of_constraint_;
   std::size_t part_count_ = 0;
+  bool has_parts_ = false;  // set_parts was called (a model may have no constraints)
 };
 
 }  // namespace tessera

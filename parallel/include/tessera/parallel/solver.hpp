@@ -180,7 +180,11 @@ struct SolverStatistics {
   std::size_t particles = 0;
   std::array<std::size_t, kConstraintFamilyCount> constraints_per_family{};
   std::size_t constraints = 0;
-  /// Colours run as Gauss–Seidel phases, their sizes, and the constraints of the Jacobi set.
+  /// Colours run as Gauss–Seidel phases, their sizes, and the constraints of the Jacobi set
+  /// (SweepOrder::part_major: the crossing constraints' phases; the parts' interior
+  /// constraints are the rest, part_constraints, swept by part_count workers' parts).
+  std::size_t part_count = 0;
+  std::size_t part_constraints = 0;
   std::size_t coloured_phases = 0;
   std::vector<std::size_t> phase_sizes;
   std::size_t jacobi_constraints = 0;

@@ -166,6 +166,15 @@ std::size_t family_of(std::span<const ConstraintIndex> family_first, ConstraintI
 
 }  // namespace
 
+void Schedule::split_by_family(std::span<const ConstraintIndex> constraints,
+                               SourceLists& members) const {
+  for (auto& m : members) m.clear();
+  for (const ConstraintIndex c : constraints) {
+    const std::size_t f = family_of(family_first_, c);
+    members[f].push_back(c - family_first_[f]);
+  }
+}
+
 void Schedule::append_group(const SourceLists& members, SourceLists& coloured, bool split) {
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
     if (members[f].empty()) continue;
@@ -203,11 +212,7 @@ void Schedule::place_by_colour(const Colouring& colouring, SourceLists& coloured
   phase_offsets_.push_back(0);
   for (Colour k = 0; k < colouring.colour_count(); ++k) {
     const auto colour = colouring.constraints_of(k);
-    for (auto& m : members) m.clear();
-    for (const ConstraintIndex c : colour) {
-      const std::size_t f = family_of(family_first_, c);
-      members[f].push_back(c - family_first_[f]);
-    }
+    split_by_family(colour, members);
     append_phase(members, colour.size(), to_jacobi(colour.size()), coloured, jacobi);
   }
 }
@@ -249,12 +254,8 @@ void Schedule::place_by_part(const Model& model, const Colouring& colouring,
 
   SourceLists members;
   const auto gather = [&](std::size_t b, Colour k) {
-    for (auto& m : members) m.clear();
-    for (std::size_t i = colour_start[b][k]; i < colour_start[b][k + 1]; ++i) {
-      const ConstraintIndex c = bucket[b][i];
-      const std::size_t f = family_of(family_first_, c);
-      members[f].push_back(c - family_first_[f]);
-    }
+    split_by_family({bucket[b].data() + colour_start[b][k], bucket[b].data() + colour_start[b][k + 1]},
+                    members);
     return colour_start[b][k + 1] - colour_start[b][k];
   };
   part_offsets_.push_back(0);

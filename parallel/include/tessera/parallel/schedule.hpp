@@ -193,6 +193,8 @@ class Schedule {
   void place_by_colour(const Colouring& colouring, SourceLists& coloured, SourceLists& jacobi);
   void place_by_part(const Model& model, const Colouring& colouring, SourceLists& coloured,
                      SourceLists& jacobi);
+  /// members[f] = the constraints (global ids) of family f, as indices within the family.
+  void split_by_family(std::span<const ConstraintIndex> constraints, SourceLists& members) const;
   /// Appends one colour's (or one part's colour's) constraints, per family, to the coloured
   /// batches, each family's run aligned to kMaxLanes; split: into parallel work blocks, else
   /// one block per family.

@@ -46,6 +46,7 @@ HWY_INLINE ContactLanes gather_contact(const ParticleArrays& arrays,
                                        std::size_t end) {
   ContactLanes lanes;
   lanes.particle = gather_particles(arrays, contacts.particles.particle[0].data() + i, end - i);
+  HWY_UNROLL(4)  // the slots' lanes stay in registers (see gather_constraint_particles)
   for (int k = 0; k < 4; ++k) {
     lanes.tet[k] = gather_particles(arrays, contacts.particles.particle[k + 1].data() + i, end - i);
     lanes.w[k] = lanes.tet[k].inverse_mass;
@@ -66,6 +67,7 @@ HWY_INLINE void scatter_contact(ParticleArrays& arrays, const ParticleTetContact
   }
   scatter_corrected(arrays, contacts.particles.particle[0].data() + i, lanes.particle,
                     correction.particle, active);
+  HWY_UNROLL(4)
   for (int k = 0; k < 4; ++k)
     scatter_corrected(arrays, contacts.particles.particle[k + 1].data() + i, lanes.tet[k],
                       correction.tet[k], active);

@@ -28,6 +28,7 @@ HWY_INLINE void gather_positions(const ParticleArrays& particles,
                                  const ParticleIndex* const* slot, std::size_t i,
                                  std::size_t end, Vec3<RealLanes> (&p)[N]) {
   const RealTag d;
+  HWY_UNROLL(16)  // the slots' lanes stay in registers (see gather_constraint_particles)
   for (int k = 0; k < N; ++k) {
     if (particles.interleaved()) {
       HWY_ALIGN ParticleIndex scratch[kMaxLanes];

@@ -13,14 +13,19 @@
 //              fewer threads than shares, e.g. more threads asked for than the machine has)
 //
 // A share's blocks are one colour's: no two touch the same movable particle, so who runs a
-// share does not change a bit of the result, and the phases run strictly in order.
+// share does not change a bit of the result, and the phases run strictly in order. A share is
+// the same slice of each of the phase's families (for_share_of_phase, below).
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <thread>
+
+#include <tessera/parallel/schedule.hpp>
 
 #if defined(__x86_64__) || defined(_M_X64)
 #include <immintrin.h>
@@ -93,5 +98,32 @@ class PhaseRegion {
   std::unique_ptr<std::atomic<std::uint8_t>[]> claimed_;
   std::unique_ptr<std::atomic<std::uint32_t>[]> done_;
 };
+
+/// Share `share` of `shares` of a coloured phase: body(family, begin, end) for the same slice
+/// of each family's constraints, cut at lane multiples. A phase lays each family out as one
+/// run of contiguous blocks (Schedule::append_group), so a slice is one kernel call. Why per
+/// family: cutting the phase's block list by count gave one thread a mixed phase's distance
+/// blocks and the other its dihedral blocks, which cost 2.3 times as much each, and the first
+/// waited at every barrier (the spin was 13 % of a 2-thread cloth profile; the 20×20×80 FEM
+/// bar went from 244 to 305 M projections/s on 2 threads with this cut).
+template <class Body>
+void for_share_of_phase(std::span<const ScheduleBlock> blocks, std::size_t share,
+                        std::size_t shares, Body&& body) {
+  for (std::size_t b = 0; b < blocks.size();) {
+    std::size_t e = b + 1;
+    while (e < blocks.size() && blocks[e].family == blocks[b].family &&
+           blocks[e].begin == blocks[e - 1].end)
+      ++e;
+    const std::size_t first = blocks[b].begin, count = blocks[e - 1].end - first;
+    // The nearest lane multiple to the even cut (the last share ends at the run's end).
+    const auto cut = [&](std::size_t s) {
+      if (s == shares) return first + count;
+      return first + std::min(count, (count * s / shares + kMaxLanes / 2) / kMaxLanes * kMaxLanes);
+    };
+    const std::size_t begin = cut(share), end = cut(share + 1);
+    if (begin < end) body(blocks[b].family, begin, end);
+    b = e;
+  }
+}
 
 }  // namespace tessera::detail

@@ -40,30 +40,6 @@ constexpr std::size_t kResidualChunk = detail::kLongestResidualRange;
 
 using Clock = std::chrono::steady_clock;
 
-/// Share `share` of `shares` of a coloured phase: body(family, begin, end) for the same slice
-/// of each family's constraints, cut at lane multiples. A phase lays each family out as one
-/// run of contiguous blocks (Schedule::append_group), so a slice is one kernel call. Why per
-/// family: cutting the phase's block list by count gave one thread a mixed phase's distance
-/// blocks and the other its dihedral blocks, which cost 2.3 times as much each, and the first
-/// waited at every barrier (13 % of a 2-thread cloth run).
-template <class Body>
-void for_share_of_phase(std::span<const ScheduleBlock> blocks, std::size_t share,
-                        std::size_t shares, Body&& body) {
-  for (std::size_t b = 0; b < blocks.size();) {
-    std::size_t e = b + 1;
-    while (e < blocks.size() && blocks[e].family == blocks[b].family &&
-           blocks[e].begin == blocks[e - 1].end)
-      ++e;
-    const std::size_t first = blocks[b].begin, count = blocks[e - 1].end - first;
-    const auto cut = [&](std::size_t s) {
-      return first + std::min(count, detail::round_up(count * s / shares, kMaxLanes));
-    };
-    const std::size_t begin = cut(share), end = cut(share + 1);
-    if (begin < end) body(blocks[b].family, begin, end);
-    b = e;
-  }
-}
-
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -149,8 +125,17 @@ template <class Entry, template <ConstraintFamily> class Make, std::size_t... F>
 constexpr std::array<Entry, kConstraintFamilyCount> table(std::index_sequence<F...>) {
   return {Make<ConstraintFamily(F)>::value...};
 }
+/// λ of constraints [begin, end) set to 0; nothing for a family without λ.
+template <ConstraintFamily Family>
+void zero_lambdas(ConstraintSets& sets, std::size_t begin, std::size_t end) {
+  if (Real* lambda = lambda_of(sets.get<Family>())) std::fill(lambda + begin, lambda + end, Real(0));
+}
+using ZeroLambdas = void (*)(ConstraintSets&, std::size_t, std::size_t);
+
 template <ConstraintFamily F>
 struct ProjectEntry { static constexpr ProjectBlock value = &project_block<F>; };
+template <ConstraintFamily F>
+struct ZeroLambdasEntry { static constexpr ZeroLambdas value = &zero_lambdas<F>; };
 template <ConstraintFamily F>
 struct SequentialEntry { static constexpr ProjectBlock value = &project_block_sequentially<F>; };
 template <ConstraintFamily F>
@@ -159,6 +144,7 @@ constexpr auto kFamilies = std::make_index_sequence<kConstraintFamilyCount>();
 constexpr auto kProjectBlock = table<ProjectBlock, ProjectEntry>(kFamilies);
 constexpr auto kProjectSequentially = table<ProjectBlock, SequentialEntry>(kFamilies);
 constexpr auto kVelocityBlock = table<VelocityBlock, VelocityEntry>(kFamilies);
+constexpr auto kZeroLambdas = table<ZeroLambdas, ZeroLambdasEntry>(kFamilies);
 
 }  // namespace
 
@@ -324,7 +310,7 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
         for (std::size_t part = first; part < last; ++part)
           for (const ScheduleBlock& b : schedule_.part_blocks(stage.first_block + part)) {
             if (stage.kind == StageKind::part_sweep)
-              kProjectBlock[std::size_t(b.family)](arrays, sets, b.begin, b.end, projection);
+              project_range(arrays, stage.set, b.family, b.begin, b.end, projection);
             else
               kVelocityBlock[std::size_t(b.family)](arrays, sets, b.begin, b.end, projection.dt);
           }
@@ -336,9 +322,9 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
       const std::size_t shares = statistics_.threads;
       parallel_chunks(shares, 1, [&](std::size_t first, std::size_t last) {
         for (std::size_t share = first; share < last; ++share)
-          for_share_of_phase(blocks, share, shares, [&](ConstraintFamily f, std::size_t begin,
+          detail::for_share_of_phase(blocks, share, shares, [&](ConstraintFamily f, std::size_t begin,
                                                         std::size_t end) {
-            kProjectBlock[std::size_t(f)](particles, sets, begin, end, projection);
+            project_range(particles, stage.set, f, begin, end, projection);
           });
       });
       return;
@@ -510,11 +496,10 @@ void Solver::run_phase_region(std::size_t first, std::size_t last,
   const ParticleArrays particles = sweep_arrays();
   const auto run_share = [&](std::size_t phase, std::size_t share) {
     const Stage& stage = stages_[first + phase];
-    ConstraintSets& sets = batches_of(stage.set);
     // The same slice every iteration, so a thread's particles stay in its cache.
-    for_share_of_phase(blocks_of(stage), share, shares,
+    detail::for_share_of_phase(blocks_of(stage), share, shares,
                        [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
-                         kProjectBlock[std::size_t(f)](particles, sets, begin, end, projection);
+                         project_range(particles, stage.set, f, begin, end, projection);
                        });
   };
   arena_->execute([&] {
@@ -609,6 +594,7 @@ void Solver::project(std::size_t iterations, Real dt) {
   projection_dt_ = dt;
   const auto start = Clock::now();
   save_state();
+  fresh_lambdas_ = false;        // a step that threw may have left it set
   interleaved_current_ = false;  // the state may have been set since the last step
   {
     begin_sweeps();
@@ -621,7 +607,18 @@ void Solver::project(std::size_t iterations, Real dt) {
       std::uint64_t(iterations) * (statistics_.constraints + dynamic_count_);
 }
 
-void Solver::reset_lambdas() {
+void Solver::project_range(const ParticleArrays& particles, StageSet set, ConstraintFamily f,
+                           std::size_t begin, std::size_t end,
+                           const ProjectionSettings& projection) {
+  ConstraintSets& sets = batches_of(set);
+  if (fresh_lambdas_ && set == StageSet::coloured && chebyshev_iteration_ == 1)
+    kZeroLambdas[std::size_t(f)](sets, begin, end);
+  kProjectBlock[std::size_t(f)](particles, sets, begin, end, projection);
+}
+
+void Solver::reset_lambdas() { zero_lambdas(true); }
+
+void Solver::zero_lambdas(bool coloured) {
   // In parallel chunks: on the 1024² cloth the multipliers are 25 MB per substep.
   constexpr std::size_t kLambdaChunk = std::size_t(1) << 16;
   const auto reset = [&](ConstraintFamily, auto& batch) {
@@ -631,7 +628,7 @@ void Solver::reset_lambdas() {
                         std::fill(lambda + first, lambda + last, Real(0));
                       });
   };
-  schedule_.coloured().for_each(reset);
+  if (coloured) schedule_.coloured().for_each(reset);
   schedule_.jacobi().constraints.for_each(reset);
   dynamic_.constraints.for_each(reset);
   contacts_.constraints.for_each(reset);
@@ -728,7 +725,12 @@ void Solver::step() {
     if (!predicted) integrate(h);
     predicted = false;
     if (collisions_) detect_contacts(h);
-    reset_lambdas();
+    // The coloured set's λ are zeroed by the first iteration, range by range, unless a
+    // residual reads them before it (fresh_lambdas_).
+    fresh_lambdas_ = settings_.iterations != 0 &&
+                     (settings_.mode == SolverMode::gs || settings_.mode == SolverMode::hybrid) &&
+                     !(last && (settings_.report_residuals || settings_.record_convergence));
+    zero_lambdas(!fresh_lambdas_);
     if (last && settings_.report_residuals) report_.residual_before = residual();
     if (last && settings_.record_convergence) report_.history.push_back(report_.residual_before);
     const auto projection_start = Clock::now();
@@ -742,6 +744,7 @@ void Solver::step() {
           report_.history.push_back(residual());
         }
       }
+      fresh_lambdas_ = false;
       if (!(last && settings_.record_convergence))
         statistics_.seconds_projection += seconds_since(projection_start);
       statistics_.projections += std::uint64_t(settings_.iterations) *

@@ -1,9 +1,12 @@
 // detail::PhaseRegion (parallel/src/phase_region.hpp): every share of every phase runs exactly
 // once and no share of a phase starts before the previous phase has finished, whether all the
 // shares' threads run or only some (the others' shares are taken over); and the solver gives
-// the same bits with its phases in regions or a parallel_for each.
+// the same bits with its phases in regions or a parallel_for each; a phase's shares are the
+// same slice of each family; a substep's first iteration zeroing λ range by range gives the
+// bits of a λ reset before it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <thread>
 #include <vector>
@@ -61,6 +64,76 @@ TEST(PhaseRegion, TheSolverGivesTheSameBitsWithOrWithoutRegions) {
     }
   for (std::size_t i = 1; i < results.size(); ++i)
     EXPECT_TRUE(test::same_bits(results[0], results[i])) << i;
+}
+
+/// Shares of a phase with 40 distance constraints in three blocks, then 100 dihedral ones in
+/// two (the dihedral run begins at a lane multiple, as Schedule::append_group lays it out).
+TEST(PhaseRegion, SharesAreTheSameSliceOfEachFamily) {
+  const std::vector<ScheduleBlock> blocks = {
+      {ConstraintFamily::distance, 0, 16}, {ConstraintFamily::distance, 16, 32},
+      {ConstraintFamily::distance, 32, 40}, {ConstraintFamily::dihedral, 48, 112},
+      {ConstraintFamily::dihedral, 112, 148}};
+  for (const std::size_t shares : {1u, 2u, 3u, 7u}) {
+    std::vector<int> covered(148, 0);
+    std::vector<std::size_t> per_family[2];
+    for (std::size_t share = 0; share < shares; ++share) {
+      std::size_t counts[2] = {0, 0};
+      detail::for_share_of_phase(blocks, share, shares,
+                                 [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
+                                   EXPECT_LT(begin, end);
+                                   EXPECT_EQ((begin - (f == ConstraintFamily::distance ? 0 : 48)) % kMaxLanes, 0u);
+                                   for (std::size_t c = begin; c < end; ++c) ++covered[c];
+                                   counts[f == ConstraintFamily::distance ? 0 : 1] += end - begin;
+                                 });
+      per_family[0].push_back(counts[0]);
+      per_family[1].push_back(counts[1]);
+    }
+    for (std::size_t c = 0; c < covered.size(); ++c)
+      EXPECT_EQ(covered[c], (c < 40 || c >= 48) ? 1 : 0) << "slot " << c << ", " << shares << " shares";
+    // Each family is cut into shares within two SIMD widths of each other: the dihedral
+    // constraints are not all in the last shares.
+    for (const auto& counts : per_family) {
+      const auto [low, high] = std::minmax_element(counts.begin(), counts.end());
+      EXPECT_LE(*high - *low, 2 * kMaxLanes) << shares << " shares";
+      if (shares <= 2) EXPECT_GT(*low, 0u) << shares << " shares";
+    }
+  }
+}
+
+/// With one substep per step, a step with residual reports resets λ before its iterations and
+/// a step without zeroes them range by range in the first: the same bits, for colour-major on
+/// 1 and 2 threads (a phase region), hybrid, and part-major. Without the zeroing, λ would
+/// carry over from step to step.
+TEST(PhaseRegion, FreshLambdasGiveTheBitsOfAReset) {
+  const Model cloth = test::cloth_model(24, 20);
+  struct Case {
+    SolverMode mode;
+    SweepOrder order;
+    const char* strategy;
+    std::size_t threads;
+  };
+  for (const Case& c : {Case{SolverMode::gs, SweepOrder::colour_major, "stencil", 1},
+                        Case{SolverMode::gs, SweepOrder::colour_major, "stencil", 2},
+                        Case{SolverMode::hybrid, SweepOrder::colour_major, "greedy", 2},
+                        Case{SolverMode::gs, SweepOrder::part_major, "metis", 2}}) {
+    std::vector<std::vector<Vector3r>> results;
+    for (const bool report : {true, false}) {
+      SolverSettings settings;
+      settings.mode = c.mode;
+      settings.sweep_order = c.order;
+      settings.threads = c.threads;
+      settings.substeps = 1;
+      settings.iterations = 3;
+      settings.report_residuals = report;
+      ColouringOptions options;
+      options.particles_per_part = 96;
+      Solver solver(cloth, test::colour_model(cloth, c.strategy, options), settings);
+      for (int step = 0; step < 6; ++step) solver.step();
+      results.push_back(solver.positions());
+    }
+    EXPECT_TRUE(test::same_bits(results[0], results[1]))
+        << solver_mode_name(c.mode) << " " << sweep_order_name(c.order) << " " << c.threads;
+  }
 }
 
 }  // namespace

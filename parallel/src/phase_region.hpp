@@ -3,9 +3,9 @@
 // Why: a parallel_for per colour costs a fork and a join per colour (TBB wakes its workers,
 // hands out the range, waits for the last one): about 15 % of a 2-thread cloth substep with 20
 // colours. Here the threads enter once per iteration and meet at a spin barrier between
-// colours. Each thread keeps the same share of every phase's blocks each time (as
-// static_partitioner does), so its particles stay in its cache; the earlier try that let
-// threads claim blocks dynamically lost that and was slower.
+// colours. Each thread keeps the same share of every phase each time (as static_partitioner
+// does), so its particles stay in its cache; the earlier try that let threads claim blocks
+// dynamically lost that and was slower.
 //
 //   thread t:  phase 0 share t │ wait for phase 0 │ phase 1 share t │ wait ... │ phase P-1 share t
 //              (a share is run by whoever claims it first: its owner, or a thread that has

@@ -40,7 +40,6 @@ constexpr std::size_t kResidualChunk = detail::kLongestResidualRange;
 
 using Clock = std::chrono::steady_clock;
 
-
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -322,10 +321,10 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
       const std::size_t shares = statistics_.threads;
       parallel_chunks(shares, 1, [&](std::size_t first, std::size_t last) {
         for (std::size_t share = first; share < last; ++share)
-          detail::for_share_of_phase(blocks, share, shares, [&](ConstraintFamily f, std::size_t begin,
-                                                        std::size_t end) {
-            project_range(particles, stage.set, f, begin, end, projection);
-          });
+          detail::for_share_of_phase(
+              blocks, share, shares, [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
+                project_range(particles, stage.set, f, begin, end, projection);
+              });
       });
       return;
     }
@@ -353,8 +352,13 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
       };
       if ((stage.set == StageSet::coloured || stage.set == StageSet::contact_colours) &&
           settings_.mode != SolverMode::sequential) {
-        parallel_chunks(blocks.size(), 1, [&](std::size_t first, std::size_t last) {
-          for (std::size_t b = first; b < last; ++b) solve(blocks[b]);
+        const std::size_t shares = statistics_.threads;
+        parallel_chunks(shares, 1, [&](std::size_t first, std::size_t last) {
+          for (std::size_t share = first; share < last; ++share)
+            detail::for_share_of_phase(
+                blocks, share, shares, [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
+                  solve({f, std::uint32_t(begin), std::uint32_t(end)});
+                });
         });
       } else {
         // A Jacobi set's (or the input order's) constraints may share particles: in order.
@@ -497,10 +501,11 @@ void Solver::run_phase_region(std::size_t first, std::size_t last,
   const auto run_share = [&](std::size_t phase, std::size_t share) {
     const Stage& stage = stages_[first + phase];
     // The same slice every iteration, so a thread's particles stay in its cache.
-    detail::for_share_of_phase(blocks_of(stage), share, shares,
-                       [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
-                         project_range(particles, stage.set, f, begin, end, projection);
-                       });
+    detail::for_share_of_phase(
+        blocks_of(stage), share, shares,
+        [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
+          project_range(particles, stage.set, f, begin, end, projection);
+        });
   };
   arena_->execute([&] {
     tbb::parallel_for(
@@ -594,7 +599,6 @@ void Solver::project(std::size_t iterations, Real dt) {
   projection_dt_ = dt;
   const auto start = Clock::now();
   save_state();
-  fresh_lambdas_ = false;        // a step that threw may have left it set
   interleaved_current_ = false;  // the state may have been set since the last step
   {
     begin_sweeps();
@@ -675,6 +679,7 @@ void Solver::begin_sweeps() {
 }
 
 void Solver::end_sweeps() {
+  fresh_lambdas_ = false;  // the first iteration is over (or threw)
   if (!sweeping_) return;
   parallel_chunks(state_.size(), kParticleChunk, [&](std::size_t first, std::size_t last) {
     deinterleave_positions(interleaved_.data(), state_, first, last);
@@ -727,7 +732,8 @@ void Solver::step() {
     if (collisions_) detect_contacts(h);
     // The coloured set's λ are zeroed by the first iteration, range by range, unless a
     // residual reads them before it (fresh_lambdas_).
-    fresh_lambdas_ = settings_.iterations != 0 &&
+    // Not with a phase hook, which may read λ of phases not yet swept.
+    fresh_lambdas_ = settings_.iterations != 0 && !phase_hook_ &&
                      (settings_.mode == SolverMode::gs || settings_.mode == SolverMode::hybrid) &&
                      !(last && (settings_.report_residuals || settings_.record_convergence));
     zero_lambdas(!fresh_lambdas_);
@@ -744,7 +750,6 @@ void Solver::step() {
           report_.history.push_back(residual());
         }
       }
-      fresh_lambdas_ = false;
       if (!(last && settings_.record_convergence))
         statistics_.seconds_projection += seconds_since(projection_start);
       statistics_.projections += std::uint64_t(settings_.iterations) *

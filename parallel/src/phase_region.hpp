@@ -49,10 +49,23 @@ inline void spin_pause() {
 /// The claims and completion counts of one region's phases × shares.
 class PhaseRegion {
  public:
-  PhaseRegion(std::size_t phases, std::size_t shares)
-      : phases_(phases), shares_(shares),
-        claimed_(std::make_unique<std::atomic<std::uint8_t>[]>(phases * shares)),
-        done_(std::make_unique<std::atomic<std::uint32_t>[]>(phases)) {
+  PhaseRegion() = default;
+  PhaseRegion(std::size_t phases, std::size_t shares) { reset(phases, shares); }
+
+  /// Ready for a region of phases × shares, nothing claimed or done; allocates only when the
+  /// region is larger than any before (the solver keeps one and resets it per iteration).
+  /// Not while a region runs.
+  void reset(std::size_t phases, std::size_t shares) {
+    if (phases * shares > claimed_capacity_) {
+      claimed_ = std::make_unique<std::atomic<std::uint8_t>[]>(phases * shares);
+      claimed_capacity_ = phases * shares;
+    }
+    if (phases > done_capacity_) {
+      done_ = std::make_unique<std::atomic<std::uint32_t>[]>(phases);
+      done_capacity_ = phases;
+    }
+    phases_ = phases;
+    shares_ = shares;
     for (std::size_t i = 0; i < phases * shares; ++i) claimed_[i].store(0, std::memory_order_relaxed);
     for (std::size_t k = 0; k < phases; ++k) done_[k].store(0, std::memory_order_relaxed);
   }
@@ -94,7 +107,8 @@ class PhaseRegion {
     }
   }
 
-  std::size_t phases_, shares_;
+  std::size_t phases_ = 0, shares_ = 0;
+  std::size_t claimed_capacity_ = 0, done_capacity_ = 0;
   std::unique_ptr<std::atomic<std::uint8_t>[]> claimed_;
   std::unique_ptr<std::atomic<std::uint32_t>[]> done_;
 };

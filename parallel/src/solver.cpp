@@ -496,7 +496,9 @@ void Solver::iterate(const ProjectionSettings& projection, std::size_t iteration
 void Solver::run_phase_region(std::size_t first, std::size_t last,
                               const ProjectionSettings& projection) {
   const std::size_t shares = statistics_.threads;
-  detail::PhaseRegion region(last - first, shares);
+  if (!phase_region_) phase_region_ = std::make_unique<detail::PhaseRegion>();
+  detail::PhaseRegion& region = *phase_region_;
+  region.reset(last - first, shares);
   const ParticleArrays particles = sweep_arrays();
   const auto run_share = [&](std::size_t phase, std::size_t share) {
     const Stage& stage = stages_[first + phase];

@@ -22,8 +22,8 @@ namespace {
 
 /// Runs a region of `phases` × `shares` on `threads` threads (thread t runs share t; shares
 /// without a thread are taken over) and checks each share ran once, in phase order.
-void check_region(std::size_t phases, std::size_t shares, std::size_t threads) {
-  detail::PhaseRegion region(phases, shares);
+void check_region(detail::PhaseRegion& region, std::size_t phases, std::size_t shares,
+                  std::size_t threads) {
   std::vector<std::atomic<int>> runs(phases * shares);
   std::vector<std::atomic<int>> finished(phases);
   std::atomic<int> out_of_order{0};
@@ -41,7 +41,24 @@ void check_region(std::size_t phases, std::size_t shares, std::size_t threads) {
   EXPECT_EQ(out_of_order.load(), 0);
 }
 
+void check_region(std::size_t phases, std::size_t shares, std::size_t threads) {
+  detail::PhaseRegion region(phases, shares);
+  check_region(region, phases, shares, threads);
+}
+
 TEST(PhaseRegion, EveryShareRunsOnceInPhaseOrder) { check_region(20, 2, 2); }
+
+/// The solver keeps one region and resets it per iteration: smaller, then larger than before.
+TEST(PhaseRegion, AResetRegionRunsLikeANewOne) {
+  detail::PhaseRegion region(20, 2);
+  check_region(region, 20, 2, 2);
+  region.reset(5, 3);
+  check_region(region, 5, 3, 3);
+  region.reset(20, 2);
+  check_region(region, 20, 2, 2);
+  region.reset(40, 4);
+  check_region(region, 40, 4, 2);
+}
 
 TEST(PhaseRegion, SharesWithoutAThreadAreTakenOver) {
   check_region(7, 3, 1);  // one thread does all three shares of every phase

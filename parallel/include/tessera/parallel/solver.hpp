@@ -50,6 +50,7 @@ namespace tessera {
 
 namespace detail {
 struct ColouredContacts;
+class PhaseRegion;
 }
 
 /// Jacobi over-relaxation ω when nothing else is said (see the README for the measurement).
@@ -425,6 +426,8 @@ class Solver {
   /// and the λ arrays are not restored (they are reset at the next step).
   std::array<AlignedVector<Real>, 6> saved_;
   std::unique_ptr<tbb::task_arena> arena_;
+  /// The claims and counts of run_phase_region, kept between iterations (phase_region.hpp).
+  std::unique_ptr<detail::PhaseRegion> phase_region_;
   StepReport report_;
   SolverStatistics statistics_;
 };

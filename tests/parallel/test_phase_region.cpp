@@ -112,7 +112,9 @@ TEST(PhaseRegion, SharesAreTheSameSliceOfEachFamily) {
     for (const auto& counts : per_family) {
       const auto [low, high] = std::minmax_element(counts.begin(), counts.end());
       EXPECT_LE(*high - *low, 2 * kMaxLanes) << shares << " shares";
-      if (shares <= 2) EXPECT_GT(*low, 0u) << shares << " shares";
+      if (shares <= 2) {
+        EXPECT_GT(*low, 0u) << shares << " shares";
+      }
     }
   }
 }

@@ -30,8 +30,15 @@
 namespace tessera {
 
 struct SelfCollision::Chunks {
-  detail::ChunkedOutput<Pair> triangle_point, edge_edge, triangle_point_others;
+  detail::ChunkedOutput<Candidate> triangle_point_candidates, edge_edge_candidates,
+      triangle_point_others;
+  detail::ChunkedOutput<Pair> triangle_point, edge_edge;
   detail::ChunkedOutput<std::uint32_t> vertices;
+  /// The filter's measured candidates per chunk, a cache line each (one thread per chunk).
+  struct alignas(64) Count {
+    std::size_t measured;
+  };
+  std::vector<Count> measured;
 };
 
 namespace {
@@ -231,27 +238,32 @@ Real SelfCollision::budget_of(std::uint32_t i, const Vector3r& bulk,
   return 2 * settings.motion_scale * (motion_[i] - bulk).norm() + settings.skin;
 }
 
-bool SelfCollision::triangle_point_candidate(std::uint32_t p, std::uint32_t t, Real reach,
-                                             const SelfCollisionPositions& positions) const {
+void SelfCollision::add_triangle_point_candidate(std::uint32_t p, std::uint32_t t, Real reach,
+                                                 const SelfCollisionPositions& positions,
+                                                 std::vector<Candidate>& out) const {
   const Particles particles{positions};
   const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
-  if (p == a || p == b || p == c) return false;
-  if (particles.all_static({p, a, b, c})) return false;
+  if (p == a || p == b || p == c) return;
+  if (particles.all_static({p, a, b, c})) return;
   const Real within = reach + budget_[p] + std::max({budget_[a], budget_[b], budget_[c]});
-  return detail::squared_point_triangle_distance(anchor_[p], anchor_[a], anchor_[b], anchor_[c]) <
-         within * within;
+  const Real squared =
+      detail::squared_point_triangle_distance(anchor_[p], anchor_[a], anchor_[b], anchor_[c]);
+  if (squared < within * within) out.push_back({p, t, std::sqrt(squared)});
 }
 
-bool SelfCollision::edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real reach,
-                                        const SelfCollisionPositions& positions) const {
+void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real reach,
+                                            const SelfCollisionPositions& positions,
+                                            std::vector<Candidate>& out) const {
   const Particles particles{positions};
   const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
   const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
-  if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3) return false;
-  if (particles.all_static({p0, p1, p2, p3})) return false;
+  if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3) return;
+  if (particles.all_static({p0, p1, p2, p3})) return;
   const Real within = reach + std::max(budget_[p0], budget_[p1]) + std::max(budget_[p2], budget_[p3]);
-  return detail::squared_segment_distance(anchor_[p0], anchor_[p1], anchor_[p2], anchor_[p3]) <
-         within * within;
+  const Real squared =
+      detail::squared_segment_distance(anchor_[p0], anchor_[p1], anchor_[p2], anchor_[p3]);
+  if (squared < within * within)
+    out.push_back({std::min(e, f), std::max(e, f), std::sqrt(squared)});
 }
 
 Aabb SelfCollision::vertex_box(std::uint32_t p, Real reach) const {
@@ -272,7 +284,8 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
   check(positions, settings);
   const Real reach = compute_motion(positions, settings).distance;
   build(positions, settings, reach);
-  // This substep's contacts among the candidates.
+  // This substep's contacts among the candidates: every particle at its anchor (w = 0).
+  measure_departures(positions, Frame{Vector3r::Zero(), bulk_motion()});
   filter_candidates(positions, settings, reach);
   emit(out);
 }
@@ -316,30 +329,30 @@ void SelfCollision::build(const SelfCollisionPositions& positions,
   edge_grid_.build(edge_boxes_);
 
   // Vertex–triangle: p against the triangles its box meets.
-  chunks_->triangle_point.run(
+  chunks_->triangle_point_candidates.run(
       particle_count_,
-      [&](std::size_t vertex, std::vector<Pair>& buffer) {
+      [&](std::size_t vertex, std::vector<Candidate>& buffer) {
         const std::uint32_t p = std::uint32_t(vertex);
         const std::size_t first = buffer.size();
         triangle_grid_.for_each_overlap(vertex_boxes_[p], [&](std::uint32_t t) {
-          if (triangle_point_candidate(p, t, reach, positions)) buffer.push_back({p, t});
+          add_triangle_point_candidate(p, t, reach, positions, buffer);
         });
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
-                  [](const Pair& l, const Pair& r) { return l.second < r.second; });
+                  [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
       },
       candidate_triangle_point_);
 
   // Edge–edge: each edge against the higher edges its box meets.
-  chunks_->edge_edge.run(
+  chunks_->edge_edge_candidates.run(
       edge_queries,
-      [&](std::size_t edge, std::vector<Pair>& buffer) {
+      [&](std::size_t edge, std::vector<Candidate>& buffer) {
         const std::uint32_t e = std::uint32_t(edge);
         const std::size_t first = buffer.size();
         edge_grid_.for_each_overlap_above(edge_boxes_[e], e, [&](std::uint32_t f) {
-          if (edge_edge_candidate(e, f, reach, positions)) buffer.push_back({e, f});
+          add_edge_edge_candidate(e, f, reach, positions, buffer);
         });
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
-                  [](const Pair& l, const Pair& r) { return l.second < r.second; });
+                  [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
       },
       candidate_edge_edge_);
 }
@@ -405,6 +418,8 @@ SelfCollision::Update SelfCollision::update(const SelfCollisionPositions& positi
       done = Update::reboxed;
     }
   }
+  // A build anchors every particle at its start: a new frame that has not moved.
+  measure_departures(positions, done == Update::built ? Frame{Vector3r::Zero(), now.motion} : now);
   filter_candidates(positions, settings, reach);
   emit(out);
   return done;
@@ -464,28 +479,26 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   // their boxes now are in the second grids.
   new_vertex_.assign(particle_count_, 0);
   for (const std::uint32_t i : outran_) new_vertex_[i] = 1;
-  std::erase_if(candidate_triangle_point_, [&](const Pair& pair) {
+  std::erase_if(candidate_triangle_point_, [&](const Candidate& pair) {
     return new_vertex_[pair.first] || new_triangle_[pair.second];
   });
-  std::erase_if(candidate_edge_edge_, [&](const Pair& pair) {
+  std::erase_if(candidate_edge_edge_, [&](const Candidate& pair) {
     return new_edge_[pair.first] || new_edge_[pair.second];
   });
-  chunks_->triangle_point.run(
+  chunks_->triangle_point_candidates.run(
       outran_.size(),
-      [&](std::size_t k, std::vector<Pair>& buffer) {
+      [&](std::size_t k, std::vector<Candidate>& buffer) {
         const std::uint32_t p = outran_[k];
         const std::size_t first = buffer.size();
         const Aabb box = vertex_box(p, reach);
         triangle_grid_.for_each_overlap(box, [&](std::uint32_t t) {
-          if (!reboxed_triangle_[t] && triangle_point_candidate(p, t, reach, positions))
-            buffer.push_back({p, t});
+          if (!reboxed_triangle_[t]) add_triangle_point_candidate(p, t, reach, positions, buffer);
         });
         reboxed_triangle_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
-          const std::uint32_t t = reboxed_triangles_[entry];
-          if (triangle_point_candidate(p, t, reach, positions)) buffer.push_back({p, t});
+          add_triangle_point_candidate(p, reboxed_triangles_[entry], reach, positions, buffer);
         });
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
-                  [](const Pair& l, const Pair& r) { return l.second < r.second; });
+                  [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
       },
       found_triangle_point_);
   if (!new_triangles_.empty()) {
@@ -498,7 +511,7 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
     }
     chunks_->triangle_point_others.run(
         particle_count_,
-        [&](std::size_t vertex, std::vector<Pair>& buffer) {
+        [&](std::size_t vertex, std::vector<Candidate>& buffer) {
           const std::uint32_t p = std::uint32_t(vertex);
           if (new_vertex_[p]) return;
           const Aabb box = vertex_box(p, reach);
@@ -506,11 +519,10 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
           const std::size_t first = buffer.size();
           reboxed_triangle_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
             const std::uint32_t t = reboxed_triangles_[entry];
-            if (new_triangle_[t] && triangle_point_candidate(p, t, reach, positions))
-              buffer.push_back({p, t});
+            if (new_triangle_[t]) add_triangle_point_candidate(p, t, reach, positions, buffer);
           });
           std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
-                    [](const Pair& l, const Pair& r) { return l.second < r.second; });
+                    [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
         },
         found_others_);
     merge_sorted(found_triangle_point_, found_others_);
@@ -518,14 +530,13 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   merge_sorted(candidate_triangle_point_, found_triangle_point_);
 
   if (settings.edge_edge) {
-    chunks_->edge_edge.run(
+    chunks_->edge_edge_candidates.run(
         new_edges_.size(),
-        [&](std::size_t k, std::vector<Pair>& buffer) {
+        [&](std::size_t k, std::vector<Candidate>& buffer) {
           const std::uint32_t e = new_edges_[k];
           const Aabb box = edge_box(e, reach);
           const auto add = [&](std::uint32_t f) {
-            if (edge_edge_candidate(e, f, reach, positions))
-              buffer.push_back({std::min(e, f), std::max(e, f)});
+            add_edge_edge_candidate(e, f, reach, positions, buffer);
           };
           edge_grid_.for_each_overlap(box, [&](std::uint32_t f) {
             if (!reboxed_edge_[f]) add(f);
@@ -537,19 +548,21 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
           });
         },
         found_edge_edge_);
-    std::sort(found_edge_edge_.begin(), found_edge_edge_.end(), [](const Pair& l, const Pair& r) {
-      return l.first != r.first ? l.first < r.first : l.second < r.second;
-    });
+    std::sort(found_edge_edge_.begin(), found_edge_edge_.end(),
+              [](const Candidate& l, const Candidate& r) {
+                return l.first != r.first ? l.first < r.first : l.second < r.second;
+              });
     merge_sorted(candidate_edge_edge_, found_edge_edge_);
   }
   return true;
 }
 
-void SelfCollision::merge_sorted(std::vector<Pair>& into, const std::vector<Pair>& more) {
+void SelfCollision::merge_sorted(std::vector<Candidate>& into,
+                                 const std::vector<Candidate>& more) {
   if (more.empty()) return;
   merged_.resize(into.size() + more.size());
   std::merge(into.begin(), into.end(), more.begin(), more.end(), merged_.begin(),
-             [](const Pair& l, const Pair& r) {
+             [](const Candidate& l, const Candidate& r) {
                return l.first != r.first ? l.first < r.first : l.second < r.second;
              });
   into.swap(merged_);
@@ -578,21 +591,64 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
                            const SelfCollisionSettings& settings, Contacts& out) {
   check(positions, settings);
   const Reach reach = compute_motion(positions, settings);
+  if (anchor_.size() != particle_count_) {  // no detection: no candidates
+    triangle_point_pairs_.clear(), edge_edge_pairs_.clear();
+    measured_candidates_ = 0;
+    emit(out);
+    return;
+  }
+  measure_departures(positions, frame(positions));
   filter_candidates(positions, settings, reach.distance);
   emit(out);
+}
+
+void SelfCollision::measure_departures(const SelfCollisionPositions& positions,
+                                       const Frame& frame) {
+  const Particles particles{positions};
+  departure_.resize(particle_count_);
+  // The largest coordinate met, for the rounding allowance: the distances compared are
+  // differences of coordinates that large.
+  const Real largest = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, particle_count_, 4096), Real(0),
+      [&](const tbb::blocked_range<std::size_t>& range, Real most) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const Vector3r start = particles.start(std::uint32_t(i));
+          departure_[i] = {(start - frame.way - anchor_[i]).norm(),
+                           (motion_[i] - frame.motion).norm()};
+          most = std::max({most, start.cwiseAbs().maxCoeff(), anchor_[i].cwiseAbs().maxCoeff()});
+        }
+        return most;
+      },
+      [](Real l, Real r) { return std::max(l, r); });
+  departure_allowance_ = Real(1e-5) * largest;
 }
 
 void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
                                       const SelfCollisionSettings& settings, Real reach) {
   const Particles particles{positions};
+  const Departure* departure = departure_.data();
+  // Past this bound on d_start − max |Δp − Δx| a candidate cannot be a contact (the bound
+  // and its allowance are at the top of self_collision.hpp).
+  const Real ruled_out = reach + Real(1e-3) * reach + departure_allowance_;
+  const std::size_t chunks =
+      (std::max(candidate_triangle_point_.size(), candidate_edge_edge_.size()) +
+       detail::kCollisionChunk - 1) / detail::kCollisionChunk;
+  chunks_->measured.assign(2 * chunks, {0});
   // The candidates of the last detection, filtered by the contact rule at this substep's
   // start positions and motions; their order (sorted by key) is kept.
   chunks_->triangle_point.run(
       candidate_triangle_point_.size(),
       [&](std::size_t k, std::vector<Pair>& buffer) {
-        const Pair pair = candidate_triangle_point_[k];
-        const std::uint32_t p = pair.first, t = pair.second;
+        const Candidate candidate = candidate_triangle_point_[k];
+        const std::uint32_t p = candidate.first, t = candidate.second;
         const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
+        const Departure& dp = departure[p];
+        const Departure &da = departure[a], &db = departure[b], &dc = departure[c];
+        if (candidate.anchor_distance - (dp.way + dp.motion) -
+                (std::max({da.way, db.way, dc.way}) + std::max({da.motion, db.motion, dc.motion})) >
+            ruled_out)
+          return;
+        ++chunks_->measured[k / detail::kCollisionChunk].measured;
         const std::uint32_t point_id[1] = {p}, corner_ids[3] = {a, b, c};
         const Real within = reach + relative_motion(motion_.data(), point_id, corner_ids);
         const Vector3r point[1] = {particles.start(p)};
@@ -600,15 +656,22 @@ void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
         if (separated_along_an_axis(point, corners, within)) return;
         if (detail::squared_point_triangle_distance(point[0], corners[0], corners[1], corners[2]) <
             within * within)
-          buffer.push_back(pair);
+          buffer.push_back({p, t});
       },
       triangle_point_pairs_);
   chunks_->edge_edge.run(
       settings.edge_edge ? candidate_edge_edge_.size() : 0,
       [&](std::size_t k, std::vector<Pair>& buffer) {
-        const Pair pair = candidate_edge_edge_[k];
-        const std::uint32_t p0 = edges_[2 * pair.first], p1 = edges_[2 * pair.first + 1];
-        const std::uint32_t p2 = edges_[2 * pair.second], p3 = edges_[2 * pair.second + 1];
+        const Candidate candidate = candidate_edge_edge_[k];
+        const std::uint32_t p0 = edges_[2 * candidate.first], p1 = edges_[2 * candidate.first + 1];
+        const std::uint32_t p2 = edges_[2 * candidate.second], p3 = edges_[2 * candidate.second + 1];
+        const Departure &d0 = departure[p0], &d1 = departure[p1], &d2 = departure[p2],
+                        &d3 = departure[p3];
+        if (candidate.anchor_distance - (std::max(d0.way, d1.way) + std::max(d0.motion, d1.motion)) -
+                (std::max(d2.way, d3.way) + std::max(d2.motion, d3.motion)) >
+            ruled_out)
+          return;
+        ++chunks_->measured[chunks + k / detail::kCollisionChunk].measured;
         const std::uint32_t first_ids[2] = {p0, p1}, second_ids[2] = {p2, p3};
         const Real within = reach + relative_motion(motion_.data(), first_ids, second_ids);
         const Vector3r first[2] = {particles.start(p0), particles.start(p1)};
@@ -616,9 +679,11 @@ void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
         if (separated_along_an_axis(first, second, within)) return;
         if (detail::squared_segment_distance(first[0], first[1], second[0], second[1]) <
             within * within)
-          buffer.push_back(pair);
+          buffer.push_back({candidate.first, candidate.second});
       },
       edge_edge_pairs_);
+  measured_candidates_ = 0;
+  for (const Chunks::Count& count : chunks_->measured) measured_candidates_ += count.measured;
 }
 
 SelfCollisionConstraints make_self_collision_constraints(const SelfCollision::Contacts& contacts,

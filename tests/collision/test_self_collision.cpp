@@ -141,7 +141,7 @@ TEST(SelfCollision, ContactsBecomeCompressionOnlyConstraintsAtTheThickness) {
 
 TEST(SelfCollision, AMeshWithoutTrianglesHasNoContact) {
   SelfCollision collision({}, 4);
-  Contacts contacts{{1, 2, 3, 4}, {5, 6, 7, 8}};  // stale lists are overwritten
+  Contacts contacts{{1, 2, 3, 4}, {5, 6, 7, 8}, {9}};  // stale lists are overwritten
   collision.detect(triangle_and_point(Vector3r(0, 0, 0)), kSettings, contacts);
   EXPECT_TRUE(contacts.triangle_point.empty());
   EXPECT_TRUE(contacts.edge_edge.empty());
@@ -359,6 +359,50 @@ TEST(SelfCollision, UpdatesRebuildOnlyWhatOutranItsRoomAndMatchADetectionEachSub
   EXPECT_EQ(built, 1u) << "the first update builds; the patch is re-boxed after";
   EXPECT_GE(reboxed, 2u);
   EXPECT_GT(direct.triangle_point_count() + direct.edge_edge_count(), 0u);
+}
+
+TEST(SelfCollision, TheFilterMeasuresOnlyWhatTheAnchorDistancesCannotRuleOut) {
+  // The folded cloth at rest with a skin of 0.3 h: the layers' nearby pairs and many in-plane
+  // neighbours are candidates. At rest the anchor distances rule most of them out unmeasured;
+  // with every particle jittered about its room (start and motion, each up to half its
+  // budget) the bound rules out fewer and the list is still exactly a detection's own.
+  FoldedCloth cloth(24);
+  ParticleState& s = cloth.state;
+  const Real h = cloth.spacing();
+  for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i];
+  SelfCollision reused(cloth.grid.triangle_indices, s.size()),
+      fresh(cloth.grid.triangle_indices, s.size());
+  SelfCollisionSettings settings{Real(0.4) * h, Real(0.1) * h};
+  settings.skin = Real(0.3) * h;
+  Contacts refined, direct;
+  reused.detect(s, settings, refined);
+  const std::size_t candidates = reused.candidate_count();
+  ASSERT_GT(candidates, 1000u);
+  EXPECT_LT(reused.measured_candidate_count(), candidates / 2) << "at rest: most ruled out";
+  std::uint32_t seed = 12345;
+  const auto jitter = [&] {  // in [-0.07 h, 0.07 h]: |3 axes| < 0.15 h, half the skin
+    seed = seed * 1664525u + 1013904223u;
+    return Real(0.07) * h * (Real(seed >> 8) / Real(1 << 24) * 2 - 1);
+  };
+  for (int round = 0; round < 3; ++round) {
+    ParticleState moved = s;
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      if (s.inverse_mass[i] == 0) continue;
+      moved.previous_x[i] += jitter(), moved.previous_y[i] += jitter(), moved.previous_z[i] += jitter();
+      moved.x[i] = moved.previous_x[i] + jitter();
+      moved.y[i] = moved.previous_y[i] + jitter();
+      moved.z[i] = moved.previous_z[i] + jitter();
+    }
+    ASSERT_TRUE(reused.covers(moved)) << round;
+    reused.refine(moved, settings, refined);
+    fresh.detect(moved, settings, direct);
+    EXPECT_GT(direct.triangle_point_count() + direct.edge_edge_count(), 20u) << round;
+    EXPECT_EQ(refined.triangle_point, direct.triangle_point) << round;
+    EXPECT_EQ(refined.edge_edge, direct.edge_edge) << round;
+    EXPECT_LT(reused.measured_candidate_count(), candidates) << round;
+    EXPECT_GT(reused.measured_candidate_count(), direct.triangle_point_count() + direct.edge_edge_count())
+        << round;
+  }
 }
 
 TEST(SelfCollision, AFlatClothAtRestHasNoContact) {

@@ -146,8 +146,9 @@ void expect_exact(const Model& model, const char* strategy, std::size_t ranks) {
   // Every holder's copy of a particle is the answer too (ghosts are current).
   for (Rank r = 0; r < ranks; ++r)
     for (const ParticleIndex p : d.ranks[r].ghosts)
-      if (graph.is_movable(p))
+      if (graph.is_movable(p)) {
         ASSERT_TRUE(same_bits(copies[r].x[p], one.x[p])) << "rank " << r << ", ghost " << p;
+      }
 }
 
 TEST(Decomposition, RanksFollowingThePlanComputeBitwiseWhatOneProcessDoes) {
@@ -218,7 +219,9 @@ TEST(Decomposition, EveryParticleAndConstraintHasOneOwnerAndGhostsAreWhatOwnedCo
       std::sort(read.begin(), read.end());
       read.erase(std::unique(read.begin(), read.end()), read.end());
       EXPECT_EQ(rank.ghosts, read);
-      if (ranks == 1) EXPECT_TRUE(rank.ghosts.empty() && rank.neighbours.empty());
+      if (ranks == 1) {
+        EXPECT_TRUE(rank.ghosts.empty() && rank.neighbours.empty());
+      }
       // Receives mirror sends.
       for (Colour k = 0; k < colouring.colour_count(); ++k)
         for (const RankExchange& send : rank.sends[k]) {

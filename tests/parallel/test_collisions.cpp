@@ -280,8 +280,9 @@ TEST(Collisions, SelfContactsOfABuildReusedUntilAParticleOutrunsItAreThoseOfABui
   for (std::size_t i = 0; i < half; ++i) {
     EXPECT_GE(fourth[i].y(), Real(0.004)) << "on the ground";
     EXPECT_GE(fourth[half + i].y(), Real(0.004)) << "on the ground";
-    if (i % n != n - 1 && i / n != n - 1)
+    if (i % n != n - 1 && i / n != n - 1) {
       EXPECT_GE(fourth[half + i].y(), fourth[i].y() + Real(0.0045)) << "the upper cloth on the lower";
+    }
   }
   EXPECT_TRUE(same_bits(fourth, std::get<0>(run(4, 1)))) << "1 and 2 threads";
 }

@@ -61,7 +61,9 @@ void expect_valid(const detail::ColouredContacts& coloured, const ConstraintSets
     for (const ScheduleBlock& block : coloured.colour_blocks(k))
       for (std::uint32_t j = block.begin; j < block.end; ++j)
         for (const ParticleIndex p : ends(laid_out, j))
-          if (inverse_mass[p] > 0) EXPECT_TRUE(moved.insert(p).second) << "colour " << k;
+          if (inverse_mass[p] > 0) {
+            EXPECT_TRUE(moved.insert(p).second) << "colour " << k;
+          }
   }
 }
 

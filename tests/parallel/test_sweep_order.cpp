@@ -122,10 +122,11 @@ TEST(SweepOrder, StaticParticlesStayPutAndHybridRunsTheSmallCrossingColoursAsJac
   for (int step = 0; step < 5; ++step) solver.step();
   const auto positions = solver.positions();
   for (std::size_t p = 0; p < cloth.particles.size(); ++p)
-    if (cloth.particles.inverse_mass[p] == 0)
+    if (cloth.particles.inverse_mass[p] == 0) {
       EXPECT_TRUE(test::same_bits(std::vector<Vector3r>{positions[p]},
                                   std::vector<Vector3r>{cloth.particles.position(p)}))
           << "particle " << p;
+    }
   EXPECT_GT(solver.statistics().jacobi_constraints, 0u);
 }
 

@@ -40,6 +40,18 @@
 // box by its particles' budgets, so the grids miss no candidate. A cloth falling as a whole
 // has only its resting pairs as candidates, and keeps them.
 //
+// Filtering without measuring most candidates. Most candidates are neighbours in the cloth's
+// plane, a little beyond the reach (0.7 h apart against r ≈ 0.6 h on the drape), and stay
+// there. A candidate keeps its distance d_anchor at the anchors; the hull distance moves by
+// at most each side's largest way w, and the rule's approach is at most each side's largest
+// m, so
+//
+//   d_start − max |Δp − Δx|  ≥  d_anchor − (w_max + m_max)(first) − (w_max + m_max)(second)
+//
+// and a candidate whose right side passes r (by a rounding allowance: 10⁻³ r plus 10⁻⁵ of
+// the largest coordinate) cannot be a contact: the filter skips its exact distance. The same
+// contacts as measuring every candidate, at a fraction of the reads.
+//
 // Limit (the kernel measures |p − q|, unsigned): a contact keeps a vertex on its side only
 // while the vertex has not passed the triangle when the kernel first sees it. Starting from a
 // resolved state (distance ≥ thickness), that holds while the relative motion of the pair in
@@ -194,6 +206,9 @@ class SelfCollision {
   std::size_t candidate_count() const {
     return candidate_triangle_point_.size() + candidate_edge_edge_.size();
   }
+  /// How many candidates the last filtering measured (the rest were ruled out by their
+  /// distance at the anchors; see "Filtering" above).
+  std::size_t measured_candidate_count() const { return measured_candidates_; }
 
   std::size_t particle_count() const { return particle_count_; }
   std::span<const std::uint32_t> triangles() const { return triangles_; }
@@ -203,6 +218,16 @@ class SelfCollision {
  private:
   struct Pair {
     std::uint32_t first, second;
+  };
+  /// A candidate pair and the distance of its primitives at their anchors.
+  struct Candidate {
+    std::uint32_t first, second;
+    Real anchor_distance;
+  };
+  /// How far a particle has left its room this substep: its way since it was anchored
+  /// (w, in the frame) and its motion against the bulk's (m).
+  struct Departure {
+    Real way, motion;
   };
   struct Reach {
     Real distance;  // thickness + margin
@@ -224,11 +249,17 @@ class SelfCollision {
   Real budget_of(std::uint32_t i, const Vector3r& bulk, const SelfCollisionSettings& settings) const;
   /// Whether particle i has left its room (see "Reusing a detection").
   bool outran(std::uint32_t i, const Frame& frame, const SelfCollisionPositions& positions) const;
-  /// The candidate rule on the anchors: closer than the reach plus the two budgets.
-  bool triangle_point_candidate(std::uint32_t p, std::uint32_t t, Real reach,
-                                const SelfCollisionPositions& positions) const;
-  bool edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real reach,
-                           const SelfCollisionPositions& positions) const;
+  /// The candidate rule on the anchors: closer than the reach plus the two budgets. A
+  /// candidate is appended to `out` with its distance.
+  void add_triangle_point_candidate(std::uint32_t p, std::uint32_t t, Real reach,
+                                    const SelfCollisionPositions& positions,
+                                    std::vector<Candidate>& out) const;
+  void add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real reach,
+                               const SelfCollisionPositions& positions,
+                               std::vector<Candidate>& out) const;
+  /// Every particle's departure from its room under `frame`, into departure_, and the
+  /// rounding allowance of the filter's bound.
+  void measure_departures(const SelfCollisionPositions& positions, const Frame& frame);
   Aabb vertex_box(std::uint32_t p, Real reach) const;
   Aabb triangle_box(std::uint32_t t) const;
   Aabb edge_box(std::uint32_t e, Real reach) const;
@@ -242,7 +273,7 @@ class SelfCollision {
   /// The candidates that meet the contact rule at `positions`, into the pair lists.
   void filter_candidates(const SelfCollisionPositions& positions,
                          const SelfCollisionSettings& settings, Real reach);
-  void merge_sorted(std::vector<Pair>& into, const std::vector<Pair>& more);
+  void merge_sorted(std::vector<Candidate>& into, const std::vector<Candidate>& more);
   /// The pairs as the particle lists of `out`.
   void emit(Contacts& out) const;
 
@@ -266,12 +297,15 @@ class SelfCollision {
   UniformGrid reboxed_triangle_grid_, reboxed_edge_grid_;
   std::vector<std::uint8_t> new_vertex_, new_triangle_, new_edge_;
   std::vector<std::uint32_t> new_triangles_, new_edges_, outran_;
-  std::vector<Pair> found_triangle_point_, found_others_, found_edge_edge_, merged_;
+  std::vector<Candidate> found_triangle_point_, found_others_, found_edge_edge_, merged_;
+  std::vector<Departure> departure_;  // per particle, this substep's
+  Real departure_allowance_ = 0;      // rounding room of the filter's bound
+  std::size_t measured_candidates_ = 0;
   std::vector<Aabb> vertex_boxes_, triangle_boxes_, edge_boxes_;
   UniformGrid triangle_grid_, edge_grid_;
   std::vector<Pair> triangle_point_pairs_, edge_edge_pairs_;
   // The last detection's candidates, which refine() filters.
-  std::vector<Pair> candidate_triangle_point_, candidate_edge_edge_;
+  std::vector<Candidate> candidate_triangle_point_, candidate_edge_edge_;
   struct Chunks;  // the parallel loops' per-chunk buffers (chunked_output.hpp)
   std::unique_ptr<Chunks> chunks_;
 };

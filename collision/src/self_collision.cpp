@@ -283,15 +283,15 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
                            const SelfCollisionSettings& settings, Contacts& out) {
   check(positions, settings);
   const Real reach = compute_motion(positions, settings).distance;
-  build(positions, settings, reach);
+  const Vector3r bulk = build(positions, settings, reach);
   // This substep's contacts among the candidates: every particle at its anchor (w = 0).
-  measure_departures(positions, Frame{Vector3r::Zero(), bulk_motion()});
+  measure_departures(positions, Frame{Vector3r::Zero(), bulk});
   filter_candidates(positions, settings, reach);
   emit(out);
 }
 
-void SelfCollision::build(const SelfCollisionPositions& positions,
-                          const SelfCollisionSettings& settings, Real reach) {
+Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
+                              const SelfCollisionSettings& settings, Real reach) {
   const Particles particles{positions};
   const std::size_t triangle_count = triangles_.size() / 3;
   const std::size_t edge_count = edges_.size() / 2;
@@ -355,6 +355,7 @@ void SelfCollision::build(const SelfCollisionPositions& positions,
                   [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
       },
       candidate_edge_edge_);
+  return bulk;
 }
 
 SelfCollision::Frame SelfCollision::frame(const SelfCollisionPositions& positions) {

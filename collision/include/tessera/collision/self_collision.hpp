@@ -264,7 +264,8 @@ class SelfCollision {
   Aabb triangle_box(std::uint32_t t) const;
   Aabb edge_box(std::uint32_t e, Real reach) const;
   /// Every particle anchored at its start; the grids and the candidates.
-  void build(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings,
+  /// Returns the bulk's motion it anchored the budgets to.
+  Vector3r build(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings,
              Real reach);
   /// The particles of outran_ re-anchored, their primitives re-boxed and their candidates
   /// found again; false (nothing done) when a build would cost less.

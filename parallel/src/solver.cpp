@@ -124,10 +124,14 @@ template <class Entry, template <ConstraintFamily> class Make, std::size_t... F>
 constexpr std::array<Entry, kConstraintFamilyCount> table(std::index_sequence<F...>) {
   return {Make<ConstraintFamily(F)>::value...};
 }
-/// λ of constraints [begin, end) set to 0; nothing for a family without λ.
+/// λ of constraints [begin, end) of a batch set to 0; nothing for a family without λ.
+template <class Batch>
+void zero_lambda_range(Batch& batch, std::size_t begin, std::size_t end) {
+  if (Real* lambda = lambda_of(batch)) std::fill(lambda + begin, lambda + end, Real(0));
+}
 template <ConstraintFamily Family>
 void zero_lambdas(ConstraintSets& sets, std::size_t begin, std::size_t end) {
-  if (Real* lambda = lambda_of(sets.get<Family>())) std::fill(lambda + begin, lambda + end, Real(0));
+  zero_lambda_range(sets.get<Family>(), begin, end);
 }
 using ZeroLambdas = void (*)(ConstraintSets&, std::size_t, std::size_t);
 
@@ -210,6 +214,15 @@ void Solver::parallel_chunks(std::size_t count, std::size_t chunk, Body&& body) 
             body(k * chunk, std::min(count, (k + 1) * chunk));
         },
         tbb::static_partitioner());
+  });
+}
+
+template <class Body>
+void Solver::for_each_share(std::span<const ScheduleBlock> blocks, Body&& body) {
+  const std::size_t shares = statistics_.threads;
+  parallel_chunks(shares, 1, [&](std::size_t first, std::size_t last) {
+    for (std::size_t share = first; share < last; ++share)
+      detail::for_share_of_phase(blocks, share, shares, body);
   });
 }
 
@@ -318,13 +331,8 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
     }
     case StageKind::coloured_phase: {
       const ParticleArrays particles = sweep_arrays();
-      const std::size_t shares = statistics_.threads;
-      parallel_chunks(shares, 1, [&](std::size_t first, std::size_t last) {
-        for (std::size_t share = first; share < last; ++share)
-          detail::for_share_of_phase(
-              blocks, share, shares, [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
-                project_range(particles, stage.set, f, begin, end, projection);
-              });
+      for_each_share(blocks, [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
+        project_range(particles, stage.set, f, begin, end, projection);
       });
       return;
     }
@@ -352,13 +360,8 @@ void Solver::run_stage(const Stage& stage, const ProjectionSettings& projection)
       };
       if ((stage.set == StageSet::coloured || stage.set == StageSet::contact_colours) &&
           settings_.mode != SolverMode::sequential) {
-        const std::size_t shares = statistics_.threads;
-        parallel_chunks(shares, 1, [&](std::size_t first, std::size_t last) {
-          for (std::size_t share = first; share < last; ++share)
-            detail::for_share_of_phase(
-                blocks, share, shares, [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
-                  solve({f, std::uint32_t(begin), std::uint32_t(end)});
-                });
+        for_each_share(blocks, [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
+          solve({f, std::uint32_t(begin), std::uint32_t(end)});
         });
       } else {
         // A Jacobi set's (or the input order's) constraints may share particles: in order.
@@ -628,10 +631,10 @@ void Solver::zero_lambdas(bool coloured) {
   // In parallel chunks: on the 1024² cloth the multipliers are 25 MB per substep.
   constexpr std::size_t kLambdaChunk = std::size_t(1) << 16;
   const auto reset = [&](ConstraintFamily, auto& batch) {
-    if (Real* lambda = lambda_of(batch))
+    if (lambda_of(batch))
       parallel_chunks(padded_size(batch.size()), kLambdaChunk,
                       [&](std::size_t first, std::size_t last) {
-                        std::fill(lambda + first, lambda + last, Real(0));
+                        zero_lambda_range(batch, first, last);
                       });
   };
   if (coloured) schedule_.coloured().for_each(reset);

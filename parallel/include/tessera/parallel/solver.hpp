@@ -374,6 +374,10 @@ class Solver {
                         bool chebyshev = false);
   template <class Body>
   void parallel_chunks(std::size_t count, std::size_t chunk, Body&& body);
+  /// body(family, begin, end) over a coloured phase's blocks, one share per thread, each
+  /// share the same slice of every family (detail::for_share_of_phase).
+  template <class Body>
+  void for_each_share(std::span<const ScheduleBlock> blocks, Body&& body);
 
   SolverSettings settings_;
   Schedule schedule_;

@@ -175,7 +175,7 @@ void Schedule::split_by_family(std::span<const ConstraintIndex> constraints,
   }
 }
 
-void Schedule::append_group(const SourceLists& members, SourceLists& coloured, bool split) {
+void Schedule::append_group(const SourceLists& members, SourceLists& coloured) {
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
     if (members[f].empty()) continue;
     auto& source = coloured[f];
@@ -188,8 +188,7 @@ void Schedule::append_group(const SourceLists& members, SourceLists& coloured, b
     const ScheduleBlock range{ConstraintFamily(f), std::uint32_t(begin),
                               std::uint32_t(source.size())};
     ranges_[f].push_back(range);
-    if (split) detail::split_into_blocks(range.family, range.begin, range.end, options_, blocks_);
-    else blocks_.push_back(range);
+    blocks_.push_back(range);
   }
 }
 
@@ -201,7 +200,7 @@ void Schedule::append_phase(const SourceLists& members, std::size_t size, bool t
       jacobi[f].insert(jacobi[f].end(), members[f].begin(), members[f].end());
     return;
   }
-  append_group(members, coloured, true);
+  append_group(members, coloured);
   phase_offsets_.push_back(blocks_.size());
   phase_sizes_.push_back(size);
 }
@@ -261,7 +260,7 @@ void Schedule::place_by_part(const Model& model, const Colouring& colouring,
   part_offsets_.push_back(0);
   for (std::size_t part = 0; part < parts; ++part) {
     for (Colour k = 0; k < colouring.colour_count(); ++k)
-      if (gather(part, k) != 0) append_group(members, coloured, false);
+      if (gather(part, k) != 0) append_group(members, coloured);
     part_offsets_.push_back(blocks_.size());
   }
   phase_offsets_.push_back(blocks_.size());

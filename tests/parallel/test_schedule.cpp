@@ -4,6 +4,7 @@
 // and the particle and constraint maps lead back to the user's numbering.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <algorithm>
 #include <set>
 #include <vector>
@@ -98,7 +99,8 @@ void check_layout(const Model& model, const Colouring& colouring, const Schedule
     }
   }
   // The phases' blocks cover each coloured constraint exactly once; within a phase no
-  // movable particle is shared; blocks are aligned and no larger than block_size.
+  // movable particle is shared; blocks are aligned, one per family (the solver cuts a phase
+  // per thread, not block_size).
   std::vector<int> projected(total, 0);
   std::size_t coloured = 0;
   std::vector<std::vector<std::uint32_t>> slot_owner(kConstraintFamilyCount);
@@ -114,9 +116,11 @@ void check_layout(const Model& model, const Colouring& colouring, const Schedule
   for (std::size_t phase = 0; phase < schedule.phase_count(); ++phase) {
     std::set<ParticleIndex> touched;
     std::set<Colour> colours;
+    std::set<ConstraintFamily> families;
     for (const ScheduleBlock& block : schedule.phase_blocks(phase)) {
       EXPECT_EQ(block.begin % kMaxLanes, 0u);
-      EXPECT_LE(block.end - block.begin, schedule.options().block_size);
+      EXPECT_TRUE(families.insert(block.family).second)
+          << "family " << int(block.family) << " twice in phase " << phase;
       for (std::uint32_t slot = block.begin; slot < block.end; ++slot) {
         const std::uint32_t id = slot_owner[std::size_t(block.family)].at(slot);
         ASSERT_NE(id, ~0u) << "a block covers a padding slot";
@@ -158,28 +162,58 @@ TEST(Schedule, GaussSeidelLayoutCoversEveryConstraintOnceForEveryStrategy) {
     }
 }
 
-TEST(Schedule, BlocksShrinkSoThatEveryThreadGetsWork) {
-  const Model model = test::tet_bar_model(4, 4, 12);
+TEST(Schedule, JacobiBlocksShrinkSoThatEveryThreadGetsWork) {
+  const Model model = test::tet_bar_model(6, 6, 24);
   const Colouring colouring = test::colour_model(model, "stencil");
   for (const std::size_t threads : {1, 2, 8, 64}) {
     SCOPED_TRACE(threads);
-    const Schedule schedule(model, &colouring, {SolverMode::gs, 512, 0, threads});
-    for (std::size_t phase = 0; phase < schedule.phase_count(); ++phase) {
-      const std::size_t size = schedule.phase_sizes()[phase];
-      const std::size_t blocks = schedule.phase_blocks(phase).size();
-      // Never above block_size; at least two blocks per thread while blocks can shrink; the
-      // smallest blocks split for threads are kSmallestSplitBlock wide (a smaller one costs a
-      // task more than its projections).
-      for (const ScheduleBlock& block : schedule.phase_blocks(phase))
-        EXPECT_LE(block.end - block.begin, 512u);
-      if (size >= 4 * threads * kSmallestSplitBlock) {
-        EXPECT_GE(blocks, 2 * threads);
+    const Schedule schedule(model, &colouring, {SolverMode::jacobi, 512, 0, threads});
+    std::array<std::size_t, kConstraintFamilyCount> blocks{}, sizes{};
+    for (const ScheduleBlock& block : schedule.jacobi().blocks) {
+      EXPECT_EQ(block.begin % kMaxLanes, 0u);
+      EXPECT_LE(block.end - block.begin, 512u);  // never above block_size
+      ++blocks[std::size_t(block.family)];
+      sizes[std::size_t(block.family)] += block.end - block.begin;
+    }
+    std::size_t families = 0;
+    for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+      if (sizes[f] == 0) continue;
+      ++families;
+      // At least two blocks per thread while blocks can shrink; the smallest blocks split
+      // for threads are kSmallestSplitBlock wide (a smaller one costs a task more than its
+      // projections).
+      if (sizes[f] >= 4 * threads * kSmallestSplitBlock) {
+        EXPECT_GE(blocks[f], 2 * threads) << "family " << f;
       } else {
-        EXPECT_EQ(blocks, (size + kSmallestSplitBlock - 1) / kSmallestSplitBlock);
+        EXPECT_EQ(blocks[f], (sizes[f] + kSmallestSplitBlock - 1) / kSmallestSplitBlock)
+            << "family " << f;
       }
     }
-    check_layout(model, colouring, schedule);
+    EXPECT_GT(families, 0u);
+    if (threads == 1) {
+      EXPECT_TRUE(std::any_of(sizes.begin(), sizes.end(), [&](std::size_t size) {
+        return size > 4 * 512;
+      })) << "the bar should have a family big enough to be cut by block_size";
+    }
   }
+}
+
+TEST(Schedule, APhaseIsOneBlockPerFamilyWhateverTheBlockSize) {
+  const Model model = test::tet_bar_model(4, 4, 12);
+  const Colouring colouring = test::colour_model(model, "stencil");
+  const Schedule small(model, &colouring, {SolverMode::gs, 16, 0, 8});
+  const Schedule large(model, &colouring, {SolverMode::gs, 4096, 0, 1});
+  ASSERT_EQ(small.phase_count(), large.phase_count());
+  for (std::size_t phase = 0; phase < small.phase_count(); ++phase) {
+    const auto a = small.phase_blocks(phase), b = large.phase_blocks(phase);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      EXPECT_EQ(a[k].family, b[k].family);
+      EXPECT_EQ(a[k].begin, b[k].begin);
+      EXPECT_EQ(a[k].end, b[k].end);
+    }
+  }
+  check_layout(model, colouring, small);
 }
 
 TEST(Schedule, LocalityRenumberingMapsBackToTheUsersParticles) {

@@ -4,8 +4,10 @@
 //   family f: c0 c1 c2 c3 c4 ...   ──►   | colour 0 ......|pad| colour 1 ...|pad| colour 2 ..
 //                                          ▲ every colour starts on a kMaxLanes boundary, so
 //                                            work blocks of one colour never share a vector
-//   a colour's phase = its blocks of every family: [family, begin, end) ranges of at most
-//   block_size constraints, run by parallel_for; the phases run one after another.
+//   a colour's phase = one block per family, [family, begin, end); the solver cuts the phase
+//   into one share per thread, the same slice of every family (phase_region.hpp), and the
+//   phases run one after another. block_size cuts only the Jacobi set and contact colours,
+//   whose blocks parallel_for takes one by one.
 //
 //   Jacobi set (mode jacobi, and the small tail colours of mode hybrid): every slot of every
 //   constraint has an "incidence", a private place for its result, so all the constraints
@@ -39,10 +41,10 @@
 
 namespace tessera {
 
-/// Constraints per parallel work item when nothing else is said (see solver.hpp for the
-/// measurement behind it).
+/// Constraints per parallel work block of a Jacobi set or a contact colour when nothing else
+/// is said (README, `solver/block_size`).
 inline constexpr std::size_t kDefaultBlockSize = 512;
-/// Splitting a colour into more blocks for more threads stops at blocks of this many
+/// Splitting a Jacobi set or a contact colour into more blocks for more threads stops at blocks of this many
 /// constraints (or block_size, if smaller): a smaller block costs a task more than its
 /// projections. Measured side by side on 2 threads (`tessera run`, stepping seconds, before
 /// -> after, when the floor was one vector of 16): the pile (8 FEM blocks, 1,152 particles,
@@ -55,11 +57,13 @@ inline constexpr std::size_t kDefaultHybridThreshold = 1024;
 
 struct ScheduleOptions {
   SolverMode mode = SolverMode::gs;
-  /// Constraints per work block at most, rounded up to a multiple of kMaxLanes.
+  /// Constraints per work block of the Jacobi set and of contact colours at most, rounded up
+  /// to a multiple of kMaxLanes. (A coloured phase is one block per family: the solver cuts
+  /// it per thread.)
   std::size_t block_size = kDefaultBlockSize;
   std::size_t hybrid_threshold = kDefaultHybridThreshold;
-  /// Threads the blocks are for: a colour is cut into smaller blocks (down to kMaxLanes) when
-  /// it has fewer than 4 per thread of block_size. Any value gives the same results; 0 means
+  /// Threads the blocks are for: a Jacobi set or contact colour is cut into smaller blocks
+  /// (down to kSmallestSplitBlock) when it has fewer than 4 per thread of block_size. Any value gives the same results; 0 means
   /// every hardware thread (worker_threads).
   std::size_t threads = 1;
   /// Mode sequential: the order of the sweep.
@@ -141,6 +145,7 @@ class Schedule {
   /// One Gauss–Seidel phase per coloured colour, in colouring order (mode sequential, groups
   /// order: one per group, swept one after another by the one sequential stage).
   std::size_t phase_count() const { return phase_offsets_.empty() ? 0 : phase_offsets_.size() - 1; }
+  /// A phase's blocks: one per family it holds, in family order.
   std::span<const ScheduleBlock> phase_blocks(std::size_t phase) const {
     return {blocks_.data() + phase_offsets_[phase], blocks_.data() + phase_offsets_[phase + 1]};
   }
@@ -196,9 +201,8 @@ class Schedule {
   /// members[f] = the constraints (global ids) of family f, as indices within the family.
   void split_by_family(std::span<const ConstraintIndex> constraints, SourceLists& members) const;
   /// Appends one colour's (or one part's colour's) constraints, per family, to the coloured
-  /// batches, each family's run aligned to kMaxLanes; split: into parallel work blocks, else
-  /// one block per family.
-  void append_group(const SourceLists& members, SourceLists& coloured, bool split);
+  /// batches, each family's run aligned to kMaxLanes and one block.
+  void append_group(const SourceLists& members, SourceLists& coloured);
   /// The phase of one colour's members: appended, or (to_jacobi) left for the Jacobi set.
   void append_phase(const SourceLists& members, std::size_t size, bool to_jacobi,
                     SourceLists& coloured, SourceLists& jacobi);

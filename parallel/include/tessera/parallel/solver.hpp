@@ -130,7 +130,9 @@ struct SolverSettings {
   bool chebyshev = kDefaultChebyshev;
   Real chebyshev_rho = kDefaultChebyshevRho;
   std::size_t chebyshev_delay = kDefaultChebyshevDelay;
-  /// Constraints per parallel work block and the hybrid mode's colour-size threshold.
+  /// Constraints per parallel work block of the Jacobi set and of contact colours (a coloured
+  /// phase is cut into one share per thread instead), and the hybrid mode's colour-size
+  /// threshold.
   std::size_t block_size = kDefaultBlockSize;
   std::size_t hybrid_threshold = kDefaultHybridThreshold;
   /// Residual before and after the last substep's iterations of every step (StepReport).

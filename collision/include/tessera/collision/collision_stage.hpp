@@ -46,15 +46,23 @@ inline constexpr Real kDefaultDynamicFriction = Real(0.3);
 /// move (kSelfCollisionMotionSubsteps substeps of its motion against the cloth's median, plus
 /// kSelfCollisionSkin thicknesses); every substep until the next build tests them at its own
 /// positions, and a particle that has moved beyond its room gets its primitives re-boxed
-/// (SelfCollision::update; a full build when they pass a tenth of the mesh). So the contacts are exactly those of a detection
-/// every substep: the 128² drape (120 frames, 2 threads, full builds only) ends with the same state_hash
-/// (8c23d64097bf398c) building every substep (3,840 builds, 107.5 s of detection), at most
-/// every 4th (1,440 builds, 49.7 s), 8th (1,406, 49.3 s) or 16th (1,389, 49.2 s): the
-/// drape's fast folds, not the cap, set how often. Room of 2 substeps and 0.1 thickness
-/// measured best there (no skin: 3,250 builds; a skin of 0.3 or 0.6: fewer builds, more
-/// candidates, 55-72 s). The fixed every-4th build it replaces (4 substeps of relative motion
-/// assumed, not checked) took 23.6 s but missed contacts (4,424.4 per substep against 4,429.2)
-/// and ended elsewhere.
+/// (SelfCollision::update; a full build when they pass SelfCollision::kReboxedShare of the
+/// mesh). So the contacts are exactly those of a detection every substep: every setting below
+/// ends the drape on the same state_hash, only the cost moves. Re-measured with the filter
+/// that skips candidates by their anchor distance (detection seconds, 128² drape, one run
+/// each, Zen 4 VM; 120 frames on 2 threads, 30 frames on 1 thread):
+///
+///   room (substeps, skin)   120 frames, 2T              30 frames, 1T
+///   2, 0.1  (the default)   51.3 s (1,197 builds)       27.3 s (259 builds)
+///   1, 0.1                  54.5 s (1,764 builds)       24.2 s (368 builds)
+///   1, 0.05                 54.7 s                      23.1 s
+///   3, 0.1                  –                           33.1 s
+///   2, 0.3 / 2, 0.5         –                           30.3 s / 35.9 s
+///   1, 0                    –                           44.6 s (720 builds)
+///
+/// One substep of room wins on the first 30 frames and loses over the drape's fast folds.
+/// The cap matters little (every 16th: 27.4 s against 27.3 s on 30 frames): the folds, not
+/// the cap, set how often a build comes.
 inline constexpr std::size_t kDefaultSelfCollisionInterval = 8;
 inline constexpr std::size_t kSelfCollisionMotionSubsteps = 2;
 inline constexpr Real kSelfCollisionSkin = Real(0.1);

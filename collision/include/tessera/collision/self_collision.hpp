@@ -191,7 +191,8 @@ class SelfCollision {
     return update(SelfCollisionPositions::of(state), settings, out);
   }
   /// Above this share of the mesh's triangles and edges re-boxed since the last build,
-  /// update() builds again.
+  /// update() builds again. Measured on the 120-frame drape, 2 threads (detection seconds):
+  /// 0.05 51.7, 0.1 49.9, 0.2 49.9, 0.35 52.9: flat between a tenth and a fifth.
   static constexpr double kReboxedShare = 0.1;
 
   /// Whether the last detection's candidates still hold every contact at `positions`: each

@@ -155,15 +155,13 @@ void run_solver(benchmark::State& state, SolverMode mode, const std::string& sce
 
 constexpr const char* kDefaultStrategy = "greedy";
 
-/// The cost of one colour phase: a 16×16 distance-only cloth (6 colours of ~120 constraints)
-/// cut into blocks of kMaxLanes constraints, so each phase is a parallel_for over ~8 tiny
-/// blocks. Counter time_per_phase = wall time per sweep / phases (the kernels' own work, ~700
+/// The cost of one colour phase: a 16×16 distance-only cloth (6 colours of ~120 constraints),
+/// so each phase is one tiny share per thread and a barrier. Counter time_per_phase = wall time per sweep / phases (the kernels' own work, ~700
 /// distance projections per sweep, is included and is well under a microsecond per phase).
 void BM_PhaseOverhead(benchmark::State& state) {
   const Model model = test::cloth_model(16, 16, test::ClothBending::none);
   SolverSettings settings;
   settings.threads = std::size_t(state.range(0));
-  settings.block_size = kMaxLanes;
   settings.report_residuals = false;
   settings.check_finite = false;
   Solver solver(model, test::colour_model(model, "stencil"), settings);
@@ -385,8 +383,8 @@ void register_size_benchmarks() {
 }
 
 /// solver/block_size/<scene>/block:<B>/threads:2: mode jacobi with work blocks of B
-/// constraints, how kDefaultBlockSize was chosen (block_size cuts the Jacobi set and contact
-/// colours; a gs phase is cut into one share per thread whatever it is).
+/// constraints, how kDefaultBlockSize was chosen (block_size cuts Jacobi sets only; a colour
+/// phase is cut into one share per thread whatever it is).
 void BM_BlockSize(benchmark::State& state, const std::string& scene_name) {
   const Model& model = scene(scene_name);
   SolverSettings settings;

@@ -39,6 +39,11 @@ struct SelfCollision::Chunks {
     std::size_t measured;
   };
   std::vector<Count> measured;
+  /// The largest coordinate of each chunk of particles (measure_departures).
+  struct alignas(64) Largest {
+    Real coordinate;
+  };
+  std::vector<Largest> largest;
 };
 
 namespace {
@@ -369,15 +374,19 @@ SelfCollision::Frame SelfCollision::frame(const SelfCollisionPositions& position
   return frame;
 }
 
-bool SelfCollision::outran(std::uint32_t i, const Frame& frame,
-                           const SelfCollisionPositions& positions) const {
+SelfCollision::Departure SelfCollision::squared_departure(
+    std::uint32_t i, const Frame& frame, const SelfCollisionPositions& positions) const {
   const Particles particles{positions};
   // w = |x_start − W − anchor| (its way since it was anchored, in the frame that moves by
-  // the bulk's way W) and m = |Δ − ū| (this substep's motion against the bulk's), each
-  // within half its budget.
+  // the bulk's way W) and m = |Δ − ū| (this substep's motion against the bulk's).
+  return {(particles.start(i) - frame.way - anchor_[i]).squaredNorm(),
+          (motion_[i] - frame.motion).squaredNorm()};
+}
+
+bool SelfCollision::outran(const Departure& squared, std::uint32_t i) const {
+  // w and m each within half the budget.
   const Real half = budget_[i] / 2;
-  return (particles.start(i) - frame.way - anchor_[i]).squaredNorm() > half * half ||
-         (motion_[i] - frame.motion).squaredNorm() > half * half;
+  return squared.way > half * half || squared.motion > half * half;
 }
 
 bool SelfCollision::covers(const SelfCollisionPositions& positions) {
@@ -388,7 +397,7 @@ bool SelfCollision::covers(const SelfCollisionPositions& positions) {
       tbb::blocked_range<std::size_t>(0, particle_count_, 4096), true,
       [&](const tbb::blocked_range<std::size_t>& range, bool all) {
         for (std::size_t i = range.begin(); all && i != range.end(); ++i)
-          all = !outran(std::uint32_t(i), now, positions);
+          all = !outran(squared_departure(std::uint32_t(i), now, positions), std::uint32_t(i));
         return all;
       },
       [](bool l, bool r) { return l && r; });
@@ -404,12 +413,8 @@ SelfCollision::Update SelfCollision::update(const SelfCollisionPositions& positi
   }
   const Real reach = compute_motion(positions, settings).distance;
   const Frame now = frame(positions);
-  chunks_->vertices.run(
-      particle_count_,
-      [&](std::size_t i, std::vector<std::uint32_t>& buffer) {
-        if (outran(std::uint32_t(i), now, positions)) buffer.push_back(std::uint32_t(i));
-      },
-      outran_);
+  // The departures and the particles that outran their room, in one pass.
+  measure_departures(positions, now, &outran_);
   Update done = Update::refined;
   if (!outran_.empty()) {
     if (!rebox(positions, settings, reach, now)) {
@@ -419,8 +424,9 @@ SelfCollision::Update SelfCollision::update(const SelfCollisionPositions& positi
       done = Update::reboxed;
     }
   }
-  // A build anchors every particle at its start: a new frame that has not moved.
-  measure_departures(positions, done == Update::built ? Frame{Vector3r::Zero(), now.motion} : now);
+  // A build anchors every particle at its start: a new frame that has not moved. (A re-box
+  // settled its particles' departures itself.)
+  if (done == Update::built) measure_departures(positions, Frame{Vector3r::Zero(), now.motion});
   filter_candidates(positions, settings, reach);
   emit(out);
   return done;
@@ -456,10 +462,16 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
 
   // Re-anchor the particles that outran their room, in the frame.
   const Vector3r bulk = now.motion;
+  // Their departures under `now` (measured before): no way since (start − W − anchor is
+  // exactly 0), the same motion; the allowance grows to their new anchors' coordinates.
+  Real largest = 0;
   for (const std::uint32_t i : outran_) {
     budget_[i] = budget_of(i, bulk, settings);
     anchor_[i] = particles.start(i) - now.way;
+    departure_[i].way = 0;
+    largest = std::max(largest, anchor_[i].cwiseAbs().maxCoeff());
   }
+  departure_allowance_ = std::max(departure_allowance_, kAllowancePerCoordinate * largest);
   for (const std::uint32_t t : new_triangles_)
     if (!reboxed_triangle_[t]) reboxed_triangle_[t] = 1, reboxed_triangles_.push_back(t);
   for (const std::uint32_t e : new_edges_)
@@ -604,24 +616,30 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
 }
 
 void SelfCollision::measure_departures(const SelfCollisionPositions& positions,
-                                       const Frame& frame) {
+                                       const Frame& frame,
+                                       std::vector<std::uint32_t>* outran_list) {
   const Particles particles{positions};
   departure_.resize(particle_count_);
   // The largest coordinate met, for the rounding allowance: the distances compared are
-  // differences of coordinates that large.
-  const Real largest = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, particle_count_, 4096), Real(0),
-      [&](const tbb::blocked_range<std::size_t>& range, Real most) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          const Vector3r start = particles.start(std::uint32_t(i));
-          departure_[i] = {(start - frame.way - anchor_[i]).norm(),
-                           (motion_[i] - frame.motion).norm()};
-          most = std::max({most, start.cwiseAbs().maxCoeff(), anchor_[i].cwiseAbs().maxCoeff()});
-        }
-        return most;
+  // differences of coordinates that large. One entry per chunk (one thread per chunk).
+  chunks_->largest.assign((particle_count_ + detail::kCollisionChunk - 1) / detail::kCollisionChunk,
+                          {0});
+  chunks_->vertices.run(
+      particle_count_,
+      [&](std::size_t item, std::vector<std::uint32_t>& buffer) {
+        const std::uint32_t i = std::uint32_t(item);
+        const Departure squared = squared_departure(i, frame, positions);
+        // Eigen's norm() is the root of squaredNorm(): the same lengths as measuring apart.
+        departure_[i] = {std::sqrt(squared.way), std::sqrt(squared.motion)};
+        if (outran_list && outran(squared, i)) buffer.push_back(i);
+        Real& most = chunks_->largest[item / detail::kCollisionChunk].coordinate;
+        most = std::max({most, particles.start(i).cwiseAbs().maxCoeff(),
+                         anchor_[i].cwiseAbs().maxCoeff()});
       },
-      [](Real l, Real r) { return std::max(l, r); });
-  departure_allowance_ = Real(1e-5) * largest;
+      outran_list ? *outran_list : outran_scratch_);
+  Real largest = 0;
+  for (const Chunks::Largest& chunk : chunks_->largest) largest = std::max(largest, chunk.coordinate);
+  departure_allowance_ = kAllowancePerCoordinate * largest;
 }
 
 void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,

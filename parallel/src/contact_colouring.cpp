@@ -25,8 +25,7 @@ void for_each_particle(const Batch& batch, std::size_t j, Visit&& visit) {
 
 ColouredContacts colour_contacts(const ConstraintSets& found,
                                  std::span<std::uint64_t> contact_masks,
-                                 std::span<const Real> inverse_mass,
-                                 const ScheduleOptions& options) {
+                                 std::span<const Real> inverse_mass) {
   ColouredContacts result;
   // 1. Each contact's colour, first-fit in the stage's order (kContactColours: overflow).
   std::array<std::vector<std::uint8_t>, kConstraintFamilyCount> colour_of;
@@ -84,7 +83,8 @@ ColouredContacts colour_contacts(const ConstraintSets& found,
       source.insert(source.end(), by_colour[f].begin() + first, by_colour[f].begin() + last);
       result.ranges[f].push_back({ConstraintFamily(f), std::uint32_t(begin),
                                   std::uint32_t(source.size())});
-      split_into_blocks(ConstraintFamily(f), begin, source.size(), options, result.blocks);
+      // One block per family: the solver cuts a colour into one share per thread.
+      result.blocks.push_back(result.ranges[f].back());
       result.constraint_count += last - first;
     }
     result.colour_offsets.push_back(std::uint32_t(result.blocks.size()));

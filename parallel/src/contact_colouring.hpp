@@ -58,10 +58,10 @@ struct ColouredContacts {
 inline constexpr std::uint32_t kNoContact = ~std::uint32_t(0);
 
 /// Colours `found` (in the schedule's numbering). `contact_masks` is scratch of one word per
-/// particle, all zero, and left all zero.
+/// particle, all zero, and left all zero. Each colour holds one block per family (the solver
+/// cuts it into one share per thread).
 ColouredContacts colour_contacts(const ConstraintSets& found,
                                  std::span<std::uint64_t> contact_masks,
-                                 std::span<const Real> inverse_mass,
-                                 const ScheduleOptions& options);
+                                 std::span<const Real> inverse_mass);
 
 }  // namespace tessera::detail

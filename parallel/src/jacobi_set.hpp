@@ -1,5 +1,5 @@
 // Building a Jacobi set (schedule.hpp), and cutting a range into work blocks: shared by the
-// schedule (its Jacobi colours, its phases) and the solver (the dynamic constraints it is
+// schedule (its Jacobi colours) and the solver (the dynamic constraints and contacts it is
 // handed between steps).
 #pragma once
 

@@ -114,9 +114,9 @@ class PhaseRegion {
 };
 
 /// Share `share` of `shares` of a coloured phase: body(family, begin, end) for the same slice
-/// of each family's constraints, cut at lane multiples. A colour's phase holds each family
-/// as one block (Schedule::append_group), a contact colour as one run of contiguous blocks,
-/// so a slice is one kernel call. Why per
+/// of each family's constraints, cut at lane multiples. A colour's phase holds each family as
+/// one block (Schedule::append_group, colour_contacts), so a slice is one kernel call; runs
+/// of contiguous blocks of one family are joined all the same. Why per
 /// family: cutting the phase's block list by count gave one thread a mixed phase's distance
 /// blocks and the other its dihedral blocks, which cost 2.3 times as much each, and the first
 /// waited at every barrier (the spin was 13 % of a 2-thread cloth profile; the 20×20×80 FEM

@@ -996,8 +996,7 @@ void Solver::detect_contacts(Real h) {
     contacts_ = extra_set(contacts_found_, contact_source_, true);
   } else {
     contact_colours_ = std::make_unique<detail::ColouredContacts>(detail::colour_contacts(
-        contacts_found_, contact_masks_, inverse_masses(),
-        schedule_.options()));
+        contacts_found_, contact_masks_, inverse_masses()));
     // The overflow as a Jacobi set; its slots lead back to the found contacts.
     ConstraintSets overflow;
     std::size_t overflowed = 0;

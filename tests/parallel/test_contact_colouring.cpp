@@ -57,6 +57,11 @@ void expect_valid(const detail::ColouredContacts& coloured, const ConstraintSets
   ASSERT_EQ(placed.size(), found.distance.size());
   for (std::uint32_t c = 0; c < found.distance.size(); ++c) EXPECT_EQ(placed.count(c), 1u);
   for (std::size_t k = 0; k < coloured.colour_count(); ++k) {
+    // One block per family: the solver cuts a colour into one share per thread.
+    std::set<ConstraintFamily> families;
+    for (const ScheduleBlock& block : coloured.colour_blocks(k)) {
+      EXPECT_TRUE(families.insert(block.family).second) << "colour " << k;
+    }
     std::set<ParticleIndex> moved;
     for (const ScheduleBlock& block : coloured.colour_blocks(k))
       for (std::uint32_t j = block.begin; j < block.end; ++j)
@@ -69,7 +74,6 @@ void expect_valid(const detail::ColouredContacts& coloured, const ConstraintSets
 
 TEST(ContactColouring, NoColourMovesAParticleTwice) {
   const Cloth cloth;
-  ScheduleOptions options;
   // Random pairs of the cloth's vertices.
   std::mt19937 random(7);
   std::uniform_int_distribution<ParticleIndex> any(0, ParticleIndex(cloth.positions.size() - 1));
@@ -81,7 +85,7 @@ TEST(ContactColouring, NoColourMovesAParticleTwice) {
   ConstraintSets found;
   found.distance = contacts_between(pairs, cloth.positions);
   std::vector<std::uint64_t> scratch(cloth.positions.size(), 0);
-  const auto coloured = detail::colour_contacts(found, scratch, cloth.inverse_mass, options);
+  const auto coloured = detail::colour_contacts(found, scratch, cloth.inverse_mass);
   EXPECT_EQ(coloured.constraint_count, found.size());
   expect_valid(coloured, found, cloth.inverse_mass);
   // A movable particle's contacts need a colour each; first-fit finds one among the first
@@ -95,14 +99,13 @@ TEST(ContactColouring, NoColourMovesAParticleTwice) {
   EXPECT_LE(coloured.colour_count(), 2 * most - 1);
   for (const std::uint64_t word : scratch) EXPECT_EQ(word, 0u);
   // The same input gives the same layout.
-  const auto again = detail::colour_contacts(found, scratch, cloth.inverse_mass, options);
+  const auto again = detail::colour_contacts(found, scratch, cloth.inverse_mass);
   EXPECT_EQ(again.source, coloured.source);
   EXPECT_EQ(again.colour_offsets, coloured.colour_offsets);
 }
 
 TEST(ContactColouring, AStaticParticleSeparatesNothingAndTheSixtyFifthContactOverflows) {
   const Cloth cloth;
-  ScheduleOptions options;
   // 80 contacts from static particle 0 to 80 different particles, then 79 on particle 55.
   std::vector<ParticleIndex> pairs;
   for (ParticleIndex p = 1; p <= 80; ++p) pairs.insert(pairs.end(), {0, p});
@@ -111,7 +114,7 @@ TEST(ContactColouring, AStaticParticleSeparatesNothingAndTheSixtyFifthContactOve
   ConstraintSets found;
   found.distance = contacts_between(pairs, cloth.positions);
   std::vector<std::uint64_t> scratch(cloth.positions.size(), 0);
-  const auto coloured = detail::colour_contacts(found, scratch, cloth.inverse_mass, options);
+  const auto coloured = detail::colour_contacts(found, scratch, cloth.inverse_mass);
   expect_valid(coloured, found, cloth.inverse_mass);
   // The 80 contacts on the static particle all take colour 0 (they share nothing movable);
   // then each of 55's contacts takes the next colour its other particle leaves free: colour 0

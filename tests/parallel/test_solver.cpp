@@ -150,7 +150,7 @@ TEST(Solver, MoreThreadsThanTheMachineRunsNeitherHangNorChangeTheResult) {
     SolverSettings settings;
     settings.threads = threads;
     settings.iterations = 3;
-    settings.block_size = 16;  // many blocks per phase, so every thread claims some
+    settings.block_size = 16;  // Jacobi sets (contacts, dynamic constraints) in many blocks
     Solver solver = make_solver(cloth, settings, "stencil");
     for (int s = 0; s < 20; ++s) solver.step();
     result[threads == 1 ? 0 : 1] = solver.positions();

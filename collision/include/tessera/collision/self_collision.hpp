@@ -191,8 +191,9 @@ class SelfCollision {
     return update(SelfCollisionPositions::of(state), settings, out);
   }
   /// Above this share of the mesh's triangles and edges re-boxed since the last build,
-  /// update() builds again. Measured on the 120-frame drape, 2 threads (detection seconds):
-  /// 0.05 51.7, 0.1 49.9, 0.2 49.9, 0.35 52.9: flat between a tenth and a fifth.
+  /// update() builds again. Measured on the 120-frame drape, 2 threads (detection seconds,
+  /// one run each, ~3 % apart run to run): 0.05 51.7, 0.1 49.9, 0.2 49.9, 0.35 52.9: flat
+  /// between a tenth and a fifth (docs/performance.md).
   static constexpr double kReboxedShare = 0.1;
 
   /// Whether the last detection's candidates still hold every contact at `positions`: each
@@ -248,8 +249,12 @@ class SelfCollision {
   Frame frame(const SelfCollisionPositions& positions);
   /// Particle i's budget: 2 k |Δ − ū| + skin.
   Real budget_of(std::uint32_t i, const Vector3r& bulk, const SelfCollisionSettings& settings) const;
-  /// Whether particle i has left its room (see "Reusing a detection").
-  bool outran(std::uint32_t i, const Frame& frame, const SelfCollisionPositions& positions) const;
+  /// Particle i's departure from its room under `frame`, both parts squared.
+  Departure squared_departure(std::uint32_t i, const Frame& frame,
+                              const SelfCollisionPositions& positions) const;
+  /// Whether particle i, departed by `squared`, has left its room (see "Reusing a
+  /// detection").
+  bool outran(const Departure& squared, std::uint32_t i) const;
   /// The candidate rule on the anchors: closer than the reach plus the two budgets. A
   /// candidate is appended to `out` with its distance.
   void add_triangle_point_candidate(std::uint32_t p, std::uint32_t t, Real reach,
@@ -259,8 +264,10 @@ class SelfCollision {
                                const SelfCollisionPositions& positions,
                                std::vector<Candidate>& out) const;
   /// Every particle's departure from its room under `frame`, into departure_, and the
-  /// rounding allowance of the filter's bound.
-  void measure_departures(const SelfCollisionPositions& positions, const Frame& frame);
+  /// rounding allowance of the filter's bound; with `outran_list`, also the particles that
+  /// left their room (ascending), from the same squared lengths.
+  void measure_departures(const SelfCollisionPositions& positions, const Frame& frame,
+                          std::vector<std::uint32_t>* outran_list = nullptr);
   Aabb vertex_box(std::uint32_t p, Real reach) const;
   Aabb triangle_box(std::uint32_t t) const;
   Aabb edge_box(std::uint32_t e, Real reach) const;
@@ -302,6 +309,9 @@ class SelfCollision {
   std::vector<Candidate> found_triangle_point_, found_others_, found_edge_edge_, merged_;
   std::vector<Departure> departure_;  // per particle, this substep's
   Real departure_allowance_ = 0;      // rounding room of the filter's bound
+  std::vector<std::uint32_t> outran_scratch_;  // measure_departures' list when none is asked
+  /// The allowance per unit of the largest coordinate.
+  static constexpr Real kAllowancePerCoordinate = Real(1e-5);
   std::size_t measured_candidates_ = 0;
   std::vector<Aabb> vertex_boxes_, triangle_boxes_, edge_boxes_;
   UniformGrid triangle_grid_, edge_grid_;

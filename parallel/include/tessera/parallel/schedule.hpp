@@ -6,8 +6,8 @@
 //                                            work blocks of one colour never share a vector
 //   a colour's phase = one block per family, [family, begin, end); the solver cuts the phase
 //   into one share per thread, the same slice of every family (phase_region.hpp), and the
-//   phases run one after another. block_size cuts only the Jacobi set and contact colours,
-//   whose blocks parallel_for takes one by one.
+//   phases run one after another. block_size cuts only Jacobi sets (the schedule's, the
+//   dynamic constraints', the contacts'), whose blocks parallel_for takes one by one.
 //
 //   Jacobi set (mode jacobi, and the small tail colours of mode hybrid): every slot of every
 //   constraint has an "incidence", a private place for its result, so all the constraints
@@ -41,10 +41,10 @@
 
 namespace tessera {
 
-/// Constraints per parallel work block of a Jacobi set or a contact colour when nothing else
-/// is said (README, `solver/block_size`).
+/// Constraints per parallel work block of a Jacobi set when nothing else is said (README,
+/// `solver/block_size`).
 inline constexpr std::size_t kDefaultBlockSize = 512;
-/// Splitting a Jacobi set or a contact colour into more blocks for more threads stops at blocks of this many
+/// Splitting a Jacobi set into more blocks for more threads stops at blocks of this many
 /// constraints (or block_size, if smaller): a smaller block costs a task more than its
 /// projections. Measured side by side on 2 threads (`tessera run`, stepping seconds, before
 /// -> after, when the floor was one vector of 16): the pile (8 FEM blocks, 1,152 particles,
@@ -57,12 +57,11 @@ inline constexpr std::size_t kDefaultHybridThreshold = 1024;
 
 struct ScheduleOptions {
   SolverMode mode = SolverMode::gs;
-  /// Constraints per work block of the Jacobi set and of contact colours at most, rounded up
-  /// to a multiple of kMaxLanes. (A coloured phase is one block per family: the solver cuts
-  /// it per thread.)
+  /// Constraints per work block of a Jacobi set at most, rounded up to a multiple of
+  /// kMaxLanes. (A colour phase is one block per family: the solver cuts it per thread.)
   std::size_t block_size = kDefaultBlockSize;
   std::size_t hybrid_threshold = kDefaultHybridThreshold;
-  /// Threads the blocks are for: a Jacobi set or contact colour is cut into smaller blocks
+  /// Threads the blocks are for: a Jacobi set is cut into smaller blocks
   /// (down to kSmallestSplitBlock) when it has fewer than 4 per thread of block_size. Any value gives the same results; 0 means
   /// every hardware thread (worker_threads).
   std::size_t threads = 1;
@@ -73,7 +72,8 @@ struct ScheduleOptions {
   SweepOrder sweep_order = SweepOrder::colour_major;
 };
 
-/// Constraints [begin, end) of one family's scheduled batch: one unit of parallel work.
+/// Constraints [begin, end) of one family's scheduled batch: a colour's family (cut per
+/// thread by the solver) or one unit of a Jacobi set's parallel work.
 struct ScheduleBlock {
   ConstraintFamily family;
   std::uint32_t begin;

@@ -4,7 +4,8 @@
 //     v += h·g, x_prev = x, x += h·v          (movable particles; parallel over particles)
 //     λ = 0
 //     iterations × the mode's stages           (stage.hpp; modes in solver_mode.hpp)
-//       gs:     for each colour phase: parallel_for over its blocks → batched SIMD kernel
+//       gs:     for each colour phase: one share per thread, the same slice of each family
+//               → batched SIMD kernel
 //       jacobi: all blocks at once into incidences → per-particle averaged sum
 //       hybrid: the gs phases, then one Jacobi phase for the small colours
 //       sequential: every constraint through the scalar API, one thread, group after group
@@ -130,9 +131,9 @@ struct SolverSettings {
   bool chebyshev = kDefaultChebyshev;
   Real chebyshev_rho = kDefaultChebyshevRho;
   std::size_t chebyshev_delay = kDefaultChebyshevDelay;
-  /// Constraints per parallel work block of the Jacobi set and of contact colours (a coloured
-  /// phase is cut into one share per thread instead), and the hybrid mode's colour-size
-  /// threshold.
+  /// Constraints per parallel work block of a Jacobi set (the schedule's, the dynamic
+  /// constraints', the contacts'; a colour phase is cut into one share per thread instead),
+  /// and the hybrid mode's colour-size threshold.
   std::size_t block_size = kDefaultBlockSize;
   std::size_t hybrid_threshold = kDefaultHybridThreshold;
   /// Residual before and after the last substep's iterations of every step (StepReport).

@@ -243,6 +243,7 @@ int run_command(const RunOptions& options) {
   summary.add("projections", statistics.projections);
   summary.add("projections_per_second",
               statistics.seconds_projection > 0 ? double(statistics.projections) / statistics.seconds_projection : 0.0);
+  summary.add("steps_in_one_region", statistics.steps_in_one_region);
   add_residuals(summary, initial, final);
   // Where the largest residual is, in the model's numbering (Model::constraint_id), so a user
   // can look at the constraint that limits the run.

@@ -523,6 +523,80 @@ void Solver::run_phase_region(std::size_t first, std::size_t last,
   });
 }
 
+bool Solver::substeps_fit_one_region() const {
+  // Every substep but the last (which may read residuals, and ends with the velocity update
+  // alone) is: the iterations' coloured phases, then the velocity update fused with the next
+  // prediction. Nothing else may run between them: no contacts to detect, no velocity pass,
+  // no Jacobi stage, no hook that reads the phases.
+  if (!settings_.phase_regions || statistics_.threads < 2 || phase_hook_ || collisions_)
+    return false;
+  if (settings_.substeps < 2 || settings_.iterations == 0) return false;
+  if (settings_.mode != SolverMode::gs && settings_.mode != SolverMode::hybrid) return false;
+  if (!velocity_stages_.empty() || stages_.empty() || dynamic_count_ != 0) return false;
+  return std::all_of(stages_.begin(), stages_.end(), [](const Stage& stage) {
+    return stage.kind == StageKind::coloured_phase && stage.set == StageSet::coloured;
+  });
+}
+
+double Solver::run_substeps_in_one_region(Real h, const ProjectionSettings& projection,
+                                          std::size_t substeps) {
+  //   phase 0                  prediction of substep 0
+  //   per substep s < count:   iterations × the coloured phases (the first zeroes λ), then
+  //                            the velocity update fused with substep s + 1's prediction
+  // Each a phase of one region: the threads fork once per step instead of
+  // (iterations + 1) times per substep, and every pass is cut the same way each time.
+  const std::size_t shares = statistics_.threads;
+  const std::size_t colours = stages_.size(), iterations = settings_.iterations;
+  const std::size_t per_substep = iterations * colours + 1;
+  const IntegrationStep step = integration_step(h);
+  const bool interleaved = prepare_interleaved();
+  Real* xyzw = interleaved ? interleaved_.data() : nullptr;
+  const std::size_t n = state_.size();
+  // A share of the particle passes: cut at whole vectors (the passes run whole vectors).
+  const auto cut = [&](std::size_t s) {
+    return s == shares ? n : std::min(n, (n * s / shares) / kMaxLanes * kMaxLanes);
+  };
+  fresh_lambdas_ = true;  // substeps before the last read no residual before their iterations
+  sweeping_ = interleaved;
+  const EndSweeps end_sweeps_on_exit{this};  // if a phase throws: the sweeps' positions back
+  const ParticleArrays particles = sweep_arrays();
+  if (!phase_region_) phase_region_ = std::make_unique<detail::PhaseRegion>();
+  detail::PhaseRegion& region = *phase_region_;
+  region.reset(1 + substeps * per_substep, shares);
+  double particle_pass_seconds = 0;  // share 0's, to leave out of the projection time
+  const auto run_share = [&](std::size_t phase, std::size_t share) {
+    const std::size_t within = phase == 0 ? per_substep - 1 : (phase - 1) % per_substep;
+    if (within == per_substep - 1) {  // a particle pass
+      const auto start = Clock::now();
+      if (phase == 0)
+        predict_positions(state_, step, xyzw, cut(share), cut(share + 1));
+      else
+        update_velocities_and_predict(state_, step, xyzw, interleaved, cut(share), cut(share + 1));
+      if (share == 0) particle_pass_seconds += seconds_since(start);
+      return;
+    }
+    const Stage& stage = stages_[within % colours];
+    detail::for_share_of_phase(blocks_of(stage), share, shares,
+                               [&](ConstraintFamily f, std::size_t begin, std::size_t end) {
+                                 project_range(particles, stage.set, f, begin, end, projection,
+                                               within < colours);
+                               });
+  };
+  arena_->execute([&] {
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, shares, 1),
+        [&](const tbb::blocked_range<std::size_t>& r) {
+          for (std::size_t share = r.begin(); share != r.end(); ++share)
+            region.run(share, run_share);
+        },
+        tbb::static_partitioner());
+  });
+  // The state holds the last prediction, and so does the copy.
+  sweeping_ = false;
+  interleaved_current_ = interleaved;
+  return particle_pass_seconds;
+}
+
 void Solver::set_phase_hook(PhaseHook hook) {
   if (hook && schedule_.part_count() != 0)
     throw InvalidInput("set_phase_hook: sweep order part-major sweeps the parts' colours "
@@ -619,8 +693,14 @@ void Solver::project(std::size_t iterations, Real dt) {
 void Solver::project_range(const ParticleArrays& particles, StageSet set, ConstraintFamily f,
                            std::size_t begin, std::size_t end,
                            const ProjectionSettings& projection) {
+  project_range(particles, set, f, begin, end, projection, chebyshev_iteration_ == 1);
+}
+
+void Solver::project_range(const ParticleArrays& particles, StageSet set, ConstraintFamily f,
+                           std::size_t begin, std::size_t end,
+                           const ProjectionSettings& projection, bool first_iteration) {
   ConstraintSets& sets = batches_of(set);
-  if (fresh_lambdas_ && set == StageSet::coloured && chebyshev_iteration_ == 1)
+  if (fresh_lambdas_ && set == StageSet::coloured && first_iteration)
     kZeroLambdas[std::size_t(f)](sets, begin, end);
   kProjectBlock[std::size_t(f)](particles, sets, begin, end, projection);
 }
@@ -730,7 +810,19 @@ void Solver::step() {
   save_state();
   interleaved_current_ = false;  // a copy left by a step that threw is not this state's
   bool predicted = false;  // by the fused pass at the end of the substep before
-  for (std::size_t substep = 0; substep < settings_.substeps; ++substep) {
+  std::size_t substep = 0;
+  if (substeps_fit_one_region()) {
+    const std::size_t before_last = settings_.substeps - 1;
+    const auto region_start = Clock::now();
+    const double particle_passes = run_substeps_in_one_region(h, projection, before_last);
+    statistics_.seconds_projection += std::max(0.0, seconds_since(region_start) - particle_passes);
+    statistics_.projections +=
+        std::uint64_t(before_last) * settings_.iterations * statistics_.constraints;
+    substep = before_last;
+    predicted = true;
+    ++statistics_.steps_in_one_region;
+  }
+  for (; substep < settings_.substeps; ++substep) {
     const bool last = substep + 1 == settings_.substeps;
     if (!predicted) integrate(h);
     predicted = false;

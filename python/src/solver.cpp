@@ -292,6 +292,7 @@ void bind_solver(py::module_& m) {
             d["seconds_stepping"] = st.seconds_stepping;
             d["projections"] = st.projections;
             d["steps"] = st.steps;
+            d["steps_in_one_region"] = st.steps_in_one_region;
             return d;
           },
           "What the solver counted and timed since construction.")

@@ -69,6 +69,7 @@ class SolverStatistics(TypedDict):
     seconds_stepping: float
     projections: int
     steps: int
+    steps_in_one_region: int
 
 def info() -> dict[str, Any]:
     """Version, precision, SIMD target and threads of this build (as `tessera info`)."""

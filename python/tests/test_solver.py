@@ -135,6 +135,15 @@ def test_residuals_statistics_and_projection():
     solver.project(50)
     assert solver.residual()["rms"] < before
     assert solver.settings["iterations"] == 3 and solver.settings["mode"] == "gs"
+    # Two threads, several substeps, coloured phases only: each step's substeps but the last
+    # run as one parallel region, with the bits of one thread.
+    two = tessera.Solver(scene.model, tessera.colour(scene.model), threads=2, substeps=4)
+    one = tessera.Solver(scene.model, tessera.colour(scene.model), threads=1, substeps=4)
+    two.step(3)
+    one.step(3)
+    assert two.statistics["steps_in_one_region"] == 3
+    assert one.statistics["steps_in_one_region"] == 0
+    assert np.array_equal(two.positions, one.positions)
 
 
 def test_errors_carry_their_messages():

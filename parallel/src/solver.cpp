@@ -35,6 +35,8 @@ namespace {
 
 /// Particles (or incidences) per parallel chunk of the element-wise loops.
 constexpr std::size_t kParticleChunk = 4096;
+/// The most phases one region of whole substeps holds (Solver::run_substeps_in_one_region).
+constexpr std::size_t kMostRegionPhases = 4096;
 /// Constraints per chunk of the residual sums.
 constexpr std::size_t kResidualChunk = detail::kLongestResidualRange;
 
@@ -539,15 +541,16 @@ bool Solver::substeps_fit_one_region() const {
 }
 
 double Solver::run_substeps_in_one_region(Real h, const ProjectionSettings& projection,
-                                          std::size_t substeps) {
-  //   phase 0                  prediction of substep 0
-  //   per substep s < count:   iterations × the coloured phases (the first zeroes λ), then
-  //                            the velocity update fused with substep s + 1's prediction
-  // Each a phase of one region: the threads fork once per step instead of
-  // (iterations + 1) times per substep, and every pass is cut the same way each time.
+                                          std::size_t substeps, bool predict_first) {
+  //   predict_first:           the first substep's prediction
+  //   per substep:             iterations × the coloured phases (the first zeroes λ), then
+  //                            the velocity update fused with the next substep's prediction
+  // Each a phase of one region: the threads fork once instead of (iterations + 1) times per
+  // substep, and every pass is cut the same way each time.
   const std::size_t shares = statistics_.threads;
   const std::size_t colours = stages_.size(), iterations = settings_.iterations;
   const std::size_t per_substep = iterations * colours + 1;
+  const std::size_t first = predict_first ? 1 : 0;
   const IntegrationStep step = integration_step(h);
   const bool interleaved = prepare_interleaved();
   Real* xyzw = interleaved ? interleaved_.data() : nullptr;
@@ -556,19 +559,18 @@ double Solver::run_substeps_in_one_region(Real h, const ProjectionSettings& proj
   const auto cut = [&](std::size_t s) {
     return s == shares ? n : std::min(n, (n * s / shares) / kMaxLanes * kMaxLanes);
   };
-  fresh_lambdas_ = true;  // substeps before the last read no residual before their iterations
-  sweeping_ = interleaved;
-  const EndSweeps end_sweeps_on_exit{this};  // if a phase throws: the sweeps' positions back
-  const ParticleArrays particles = sweep_arrays();
+  // What sweep_arrays() gives while sweeping.
+  const ParticleArrays particles =
+      interleaved ? ParticleArrays::of_interleaved(xyzw, n) : ParticleArrays::of(state_);
   if (!phase_region_) phase_region_ = std::make_unique<detail::PhaseRegion>();
   detail::PhaseRegion& region = *phase_region_;
-  region.reset(1 + substeps * per_substep, shares);
+  region.reset(first + substeps * per_substep, shares);
   double particle_pass_seconds = 0;  // share 0's, to leave out of the projection time
   const auto run_share = [&](std::size_t phase, std::size_t share) {
-    const std::size_t within = phase == 0 ? per_substep - 1 : (phase - 1) % per_substep;
+    const std::size_t within = phase < first ? per_substep - 1 : (phase - first) % per_substep;
     if (within == per_substep - 1) {  // a particle pass
       const auto start = Clock::now();
-      if (phase == 0)
+      if (phase < first)
         predict_positions(state_, step, xyzw, cut(share), cut(share + 1));
       else
         update_velocities_and_predict(state_, step, xyzw, interleaved, cut(share), cut(share + 1));
@@ -582,6 +584,11 @@ double Solver::run_substeps_in_one_region(Real h, const ProjectionSettings& proj
                                                within < colours);
                                });
   };
+  // Set last, once nothing is left to allocate: a throw before the region must not copy a
+  // stale interleaved copy into the state.
+  fresh_lambdas_ = true;  // substeps before the last read no residual before their iterations
+  sweeping_ = interleaved;
+  const EndSweeps end_sweeps_on_exit{this};  // if a phase throws: the sweeps' positions back
   arena_->execute([&] {
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, shares, 1),
@@ -812,13 +819,20 @@ void Solver::step() {
   bool predicted = false;  // by the fused pass at the end of the substep before
   std::size_t substep = 0;
   if (substeps_fit_one_region()) {
-    const std::size_t before_last = settings_.substeps - 1;
-    const auto region_start = Clock::now();
-    const double particle_passes = run_substeps_in_one_region(h, projection, before_last);
-    statistics_.seconds_projection += std::max(0.0, seconds_since(region_start) - particle_passes);
-    statistics_.projections +=
-        std::uint64_t(before_last) * settings_.iterations * statistics_.constraints;
-    substep = before_last;
+    // Regions of at most kMostRegionPhases phases (their claims are phases × threads bytes).
+    const std::size_t per_substep = settings_.iterations * stages_.size() + 1;
+    const std::size_t per_region = std::max<std::size_t>(1, kMostRegionPhases / per_substep);
+    for (const std::size_t before_last = settings_.substeps - 1; substep < before_last;) {
+      const std::size_t count = std::min(per_region, before_last - substep);
+      const auto region_start = Clock::now();
+      const double particle_passes =
+          run_substeps_in_one_region(h, projection, count, substep == 0);
+      statistics_.seconds_projection +=
+          std::max(0.0, seconds_since(region_start) - particle_passes);
+      statistics_.projections += std::uint64_t(count) * settings_.iterations *
+                                 (statistics_.constraints + dynamic_count_);
+      substep += count;
+    }
     predicted = true;
     ++statistics_.steps_in_one_region;
   }

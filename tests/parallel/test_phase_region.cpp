@@ -163,7 +163,8 @@ TEST(PhaseRegion, FreshLambdasGiveTheBitsOfAReset) {
 // as a parallel_for per phase and per particle pass, and as one thread, in both particle
 // layouts; the statistics say which steps took the region.
 TEST(PhaseRegion, SubstepsInOneRegionGiveTheBitsOfOneByOne) {
-  const Model cloth = test::cloth_model(40, 30);
+  // 1,271 particles: the particle passes' shares are cut at whole vectors, not at n / threads.
+  const Model cloth = test::cloth_model(41, 31);
   // Hybrid on this cloth sweeps a Jacobi set each iteration: one by one, the same bits.
   for (const SolverMode mode : {SolverMode::gs, SolverMode::hybrid}) {
     const std::uint64_t region_steps = mode == SolverMode::gs ? 5 : 0;
@@ -197,6 +198,27 @@ TEST(PhaseRegion, SubstepsInOneRegionGiveTheBitsOfOneByOne) {
       EXPECT_EQ(in_region[3], region_steps);
     }
   }
+}
+
+// Past 4,096 phases a step's substeps go to several regions, each after the last's fused
+// prediction: still the bits of one by one.
+TEST(PhaseRegion, ManySubstepsSplitIntoRegionsGiveTheBitsOfOneByOne) {
+  const Model cloth = test::cloth_model(17, 13);
+  std::vector<std::vector<Vector3r>> positions;
+  for (const bool regions : {false, true}) {
+    SolverSettings settings;
+    settings.threads = 2;
+    settings.phase_regions = regions;
+    settings.substeps = 300;
+    settings.iterations = 2;
+    Solver solver(cloth, test::colour_model(cloth, "greedy"), settings);
+    const std::size_t phases = solver.statistics().coloured_phases;
+    ASSERT_GT((settings.substeps - 1) * (settings.iterations * phases + 1), 4096u);
+    for (int step = 0; step < 2; ++step) solver.step();
+    EXPECT_EQ(solver.statistics().steps_in_one_region, regions ? 2u : 0u);
+    positions.push_back(solver.positions());
+  }
+  EXPECT_TRUE(test::same_bits(positions[0], positions[1]));
 }
 
 }  // namespace

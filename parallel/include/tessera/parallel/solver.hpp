@@ -172,8 +172,10 @@ struct SolverSettings {
   /// colouring with parts, strategy metis).
   SweepOrder sweep_order = SweepOrder::colour_major;
   /// Consecutive coloured phases run in one parallel region per iteration, the threads
-  /// meeting at a spin barrier between colours (parallel/src/phase_region.hpp); false: a
-  /// parallel_for per phase. The same bits either way.
+  /// meeting at a spin barrier between colours (parallel/src/phase_region.hpp); with coloured
+  /// phases only, a step's substeps but the last and their particle passes run in one region
+  /// (SolverStatistics::steps_in_one_region). false: a parallel_for per phase and per pass.
+  /// The same bits either way.
   bool phase_regions = true;
 };
 
@@ -207,8 +209,9 @@ struct SolverStatistics {
   std::uint64_t projections = 0;
   std::uint64_t steps = 0;
   /// Steps whose substeps but the last ran as one parallel region (one fork per step, not
-  /// iterations + 1 per substep): gs or hybrid with coloured phases only, more than one
-  /// substep and thread, no collisions, velocity passes or phase hook.
+  /// iterations + 1 per substep; a region per 4,096 phases at most): phase_regions on, gs or
+  /// hybrid with coloured phases only (no Jacobi set), more than one substep and thread, no
+  /// collisions, dynamic constraints, velocity passes or phase hook.
   std::uint64_t steps_in_one_region = 0;
   /// With a collision stage: time spent turning each substep's contacts into their schedule
   /// (a Jacobi set, or the contact colours and the overflow's set), and, with
@@ -377,11 +380,12 @@ class Solver {
   /// Whether step() may run all substeps but the last in one parallel region
   /// (run_substeps_in_one_region): coloured phases only, nothing between the substeps.
   bool substeps_fit_one_region() const;
-  /// The first `substeps` substeps of step() (prediction, iterations, velocity update fused
-  /// with the next prediction) as the phases of one region (phase_region.hpp); the same bits
-  /// as running them one by one. Returns the seconds one thread spent in the particle passes.
+  /// `substeps` substeps of step() (iterations, then the velocity update fused with the next
+  /// prediction; with predict_first, the first one's prediction before) as the phases of one
+  /// region (phase_region.hpp): the same bits as running them one by one. Returns the seconds
+  /// one thread spent in the particle passes.
   double run_substeps_in_one_region(Real h, const ProjectionSettings& projection,
-                                    std::size_t substeps);
+                                    std::size_t substeps, bool predict_first);
   /// reset_lambdas(), with or without the schedule's coloured set.
   void zero_lambdas(bool coloured);
   ConstraintSets& batches_of(StageSet set);

@@ -514,14 +514,8 @@ void Solver::run_phase_region(std::size_t first, std::size_t last,
           project_range(particles, stage.set, f, begin, end, projection);
         });
   };
-  arena_->execute([&] {
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, shares, 1),
-        [&](const tbb::blocked_range<std::size_t>& r) {
-          for (std::size_t share = r.begin(); share != r.end(); ++share)
-            region.run(share, run_share);
-        },
-        tbb::static_partitioner());
+  parallel_chunks(shares, 1, [&](std::size_t first_share, std::size_t last_share) {
+    for (std::size_t share = first_share; share < last_share; ++share) region.run(share, run_share);
   });
 }
 
@@ -589,14 +583,8 @@ double Solver::run_substeps_in_one_region(Real h, const ProjectionSettings& proj
   fresh_lambdas_ = true;  // substeps before the last read no residual before their iterations
   sweeping_ = interleaved;
   const EndSweeps end_sweeps_on_exit{this};  // if a phase throws: the sweeps' positions back
-  arena_->execute([&] {
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, shares, 1),
-        [&](const tbb::blocked_range<std::size_t>& r) {
-          for (std::size_t share = r.begin(); share != r.end(); ++share)
-            region.run(share, run_share);
-        },
-        tbb::static_partitioner());
+  parallel_chunks(shares, 1, [&](std::size_t first_share, std::size_t last_share) {
+    for (std::size_t share = first_share; share < last_share; ++share) region.run(share, run_share);
   });
   // The state holds the last prediction, and so does the copy.
   sweeping_ = false;

@@ -12,8 +12,9 @@
 //   load:  [x y z w] per lane ─► q0 = [L0 |L4 |L8 |L12]   q1 = [L1 |L5 |L9 |L13] …
 //   unpack lo/hi (q0,q1), (q2,q3), then shuffle halves ─► X = [x0 x1 … x15], Y, Z, W
 //
-// and written back by the inverse transpose, one 128-bit store per movable lane. On Zen 4,
-// whose AVX-512 gathers and scatters are slow, this is what the sweep's speed rests on.
+// and written back by the inverse transpose, one 128-bit store per movable lane (in double,
+// 256-bit loads and stores of 32-byte particles). On Zen 4, whose AVX-512 gathers and
+// scatters are slow, and on AVX2 machines, this is what the sweep's speed rests on.
 //
 // The scatter is masked: a static particle (w = 0) may appear in several lanes or threads at
 // once, and it must never be written, not even with its own value. AVX-512 has a masked
@@ -90,6 +91,12 @@ HWY_INLINE __m512d load_particle_pair(const Real* xyzw, const ParticleIndex* ind
   const __m512d q = _mm512_castpd256_pd512(_mm256_load_pd(xyzw + 4 * std::size_t(indices[A])));
   return _mm512_insertf64x4(q, _mm256_load_pd(xyzw + 4 * std::size_t(indices[B])), 1);
 }
+#elif HWY_TARGET == HWY_AVX2 && TESSERA_DOUBLE_PRECISION
+/// Double on AVX2: lane L's particle, a whole 256-bit register.
+template <int L>
+HWY_INLINE __m256d load_particle(const Real* xyzw, const ParticleIndex* indices) {
+  return _mm256_load_pd(xyzw + 4 * std::size_t(indices[L]));
+}
 #elif HWY_TARGET == HWY_AVX2 && !TESSERA_DOUBLE_PRECISION
 /// Lanes m and m+4's particles, one per 128-bit block.
 template <int M>
@@ -130,8 +137,19 @@ HWY_INLINE ParticleLanes gather_interleaved(const Real* xyzw, const ParticleInde
   return {{RealLanes{_mm256_shuffle_ps(t0, t2, 0x44)}, RealLanes{_mm256_shuffle_ps(t0, t2, 0xEE)},
            RealLanes{_mm256_shuffle_ps(t1, t3, 0x44)}},
           RealLanes{_mm256_shuffle_ps(t1, t3, 0xEE)}};
+#elif HWY_TARGET == HWY_AVX2 && TESSERA_DOUBLE_PRECISION
+  // Four particles [x y z w]; unpacks give [x0 x1 | z0 z1] and [y0 y1 | w0 w1] (and lanes 2, 3
+  // likewise), and 128-bit block permutes join the halves.
+  const __m256d p0 = load_particle<0>(xyzw, indices), p1 = load_particle<1>(xyzw, indices);
+  const __m256d p2 = load_particle<2>(xyzw, indices), p3 = load_particle<3>(xyzw, indices);
+  const __m256d t0 = _mm256_unpacklo_pd(p0, p1), t1 = _mm256_unpackhi_pd(p0, p1);
+  const __m256d t2 = _mm256_unpacklo_pd(p2, p3), t3 = _mm256_unpackhi_pd(p2, p3);
+  return {{RealLanes{_mm256_permute2f128_pd(t0, t2, 0x20)},
+           RealLanes{_mm256_permute2f128_pd(t1, t3, 0x20)},
+           RealLanes{_mm256_permute2f128_pd(t0, t2, 0x31)}},
+          RealLanes{_mm256_permute2f128_pd(t1, t3, 0x31)}};
 #else
-  // Other targets (and AVX2 in double): four gathers with the index scaled to 4 per particle.
+  // Other targets: four gathers with the index scaled to 4 per particle.
   const IndexLanes index = hn::ShiftLeft<2>(load_particle_indices(indices));
   return {{hn::GatherIndex(d, xyzw, index), hn::GatherIndex(d, xyzw + 1, index),
            hn::GatherIndex(d, xyzw + 2, index)},
@@ -275,6 +293,20 @@ HWY_INLINE void scatter_interleaved(const ParticleArrays& particles, const Parti
   const __m256 quad[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
                           _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
   store_particle_lanes(xyzw, indices, quad, bits, std::make_integer_sequence<int, 8>());
+#elif HWY_TARGET == HWY_AVX2 && TESSERA_DOUBLE_PRECISION
+  const std::uint32_t bits = std::uint32_t(mask_bits(write));
+  if (bits == 0) return;
+  // The inverse of the gather's transpose.
+  const __m256d a0 = _mm256_permute2f128_pd(x.raw, z.raw, 0x20);
+  const __m256d a2 = _mm256_permute2f128_pd(x.raw, z.raw, 0x31);
+  const __m256d b0 = _mm256_permute2f128_pd(y.raw, w.raw, 0x20);
+  const __m256d b2 = _mm256_permute2f128_pd(y.raw, w.raw, 0x31);
+  const __m256d particle[4] = {_mm256_unpacklo_pd(a0, b0), _mm256_unpackhi_pd(a0, b0),
+                               _mm256_unpacklo_pd(a2, b2), _mm256_unpackhi_pd(a2, b2)};
+  if (bits & 1u) _mm256_store_pd(xyzw + 4 * std::size_t(indices[0]), particle[0]);
+  if (bits & 2u) _mm256_store_pd(xyzw + 4 * std::size_t(indices[1]), particle[1]);
+  if (bits & 4u) _mm256_store_pd(xyzw + 4 * std::size_t(indices[2]), particle[2]);
+  if (bits & 8u) _mm256_store_pd(xyzw + 4 * std::size_t(indices[3]), particle[3]);
 #else
   (void)xyzw;
   (void)w;

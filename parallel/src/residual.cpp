@@ -15,11 +15,11 @@ namespace tessera {
 
 namespace detail {
 
-std::vector<ResidualRange> residual_ranges(
+void residual_ranges(
     const Schedule& schedule, const ConstraintSets& dynamic, const ConstraintSets& contacts,
     const std::array<std::vector<ScheduleBlock>, kConstraintFamilyCount>& contact_colour_ranges,
-    std::size_t chunk) {
-  std::vector<ResidualRange> ranges;
+    std::size_t chunk, std::vector<ResidualRange>& ranges) {
+  ranges.clear();
   const auto add = [&](ConstraintFamily family, ResidualRange::Set set, std::size_t begin,
                        std::size_t end) {
     for (std::size_t b = begin; b < end; b += chunk)
@@ -37,7 +37,6 @@ std::vector<ResidualRange> residual_ranges(
     for (const ScheduleBlock& r : contact_colour_ranges[f])
       add(r.family, ResidualRange::contact_colours, r.begin, r.end);
   }
-  return ranges;
 }
 
 ResidualPartial residual_of_range(const ResidualRange& range, const ConstraintSets& sets,

@@ -43,11 +43,18 @@ inline constexpr std::size_t kLongestResidualRange = 2048;
 
 /// Every real constraint of the schedule, of `dynamic`, of the contacts' Jacobi set and of
 /// the coloured contacts' real ranges, in ranges of at most `chunk` (≤ kLongestResidualRange)
-/// constraints.
-std::vector<ResidualRange> residual_ranges(
+/// constraints, into `ranges` (overwritten; its capacity is reused, so a solver that keeps
+/// it allocates nothing from one residual to the next).
+void residual_ranges(
     const Schedule& schedule, const ConstraintSets& dynamic, const ConstraintSets& contacts,
     const std::array<std::vector<ScheduleBlock>, kConstraintFamilyCount>& contact_colour_ranges,
-    std::size_t chunk);
+    std::size_t chunk, std::vector<ResidualRange>& ranges);
+
+/// What Solver::residual() keeps from one call to the next: the ranges and their partials.
+struct ResidualScratch {
+  std::vector<ResidualRange> ranges;
+  std::vector<ResidualPartial> partials;
+};
 
 /// The partial sums of one range, at `particles`: of the XPBD residual C + α̃λ of the XPBD
 /// families with α̃ = compliance / compliance_dt² when compliance_dt > 0 (compliance

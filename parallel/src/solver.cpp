@@ -621,7 +621,8 @@ void Solver::restore_if_not_finite(const char* operation) {
   // The first non-finite particle of each chunk, then the first overall (deterministic).
   const std::size_t n = state_.size();
   const std::size_t chunks = (n + kParticleChunk - 1) / kParticleChunk;
-  std::vector<std::size_t> first_bad(chunks, n);
+  std::vector<std::size_t>& first_bad = first_bad_;  // kept: a step allocates nothing
+  first_bad.assign(chunks, n);
   parallel_chunks(n, kParticleChunk, [&](std::size_t first, std::size_t last) {
     for (std::size_t i = first; i < last; ++i) {
       Real sum = 0;  // finite iff every term is (x - x is 0 only for finite x)
@@ -876,10 +877,13 @@ void Solver::step() {
 
 Residual Solver::residual() {
   static const std::array<std::vector<ScheduleBlock>, kConstraintFamilyCount> kNoRanges;
-  const auto ranges = detail::residual_ranges(
-      schedule_, dynamic_.constraints, contacts_.constraints,
-      contact_colours_ ? contact_colours_->ranges : kNoRanges, kResidualChunk);
-  std::vector<detail::ResidualPartial> partials(ranges.size());
+  if (!residual_scratch_) residual_scratch_ = std::make_unique<detail::ResidualScratch>();
+  std::vector<detail::ResidualRange>& ranges = residual_scratch_->ranges;
+  detail::residual_ranges(schedule_, dynamic_.constraints, contacts_.constraints,
+                          contact_colours_ ? contact_colours_->ranges : kNoRanges,
+                          kResidualChunk, ranges);
+  std::vector<detail::ResidualPartial>& partials = residual_scratch_->partials;
+  partials.assign(ranges.size(), {});
   const ParticleArrays particles = sweep_arrays();
   // XPBD: the residual of the equations the last projections solved, C + α̃λ at their dt.
   const Real compliance_dt =

@@ -58,6 +58,7 @@ namespace tessera {
 namespace detail {
 struct ColouredContacts;
 class PhaseRegion;
+struct ResidualScratch;
 }
 
 /// Jacobi over-relaxation ω when nothing else is said (see the README for the measurement).
@@ -410,6 +411,10 @@ class Solver {
 
   SolverSettings settings_;
   Schedule schedule_;
+  /// Scratch of the per-step checks (residual(), restore_if_not_finite()), kept so that a
+  /// step in steady state allocates nothing (tests/parallel/test_step_allocations.cpp).
+  std::unique_ptr<detail::ResidualScratch> residual_scratch_;
+  std::vector<std::size_t> first_bad_;
   ParticleState state_;
   /// ParticleLayout::interleaved: x, y, z, w per particle while sweeping (sweeping_).
   AlignedVector<Real> interleaved_;

@@ -104,27 +104,37 @@ const char* kind_of(const Collider& collider) {
   return kinds[collider.index()];
 }
 
-void check_radius(Real radius, const std::string& name) {
+/// "collider <position> (<kind>)", made only for a message: the checks run every substep
+/// (find_collider_contacts), and a string per collider and substep was the stage's one
+/// allocation in steady state.
+struct ColliderName {
+  const Collider& collider;
+  std::size_t position;
+  std::string operator()() const {
+    return "collider " + std::to_string(position) + " (" + kind_of(collider) + ")";
+  }
+};
+
+void check_radius(Real radius, const ColliderName& name) {
   if (!std::isfinite(radius) || !(radius > 0))
-    throw InvalidInput(name + ": radius " + std::to_string(radius) + " must be finite and > 0");
+    throw InvalidInput(name() + ": radius " + std::to_string(radius) + " must be finite and > 0");
 }
 
-void check_finite(const Vector3r& v, const std::string& name, const char* what) {
-  if (!v.allFinite()) throw InvalidInput(name + ": " + what + " is not finite");
+void check_finite(const Vector3r& v, const ColliderName& name, const char* what) {
+  if (!v.allFinite()) throw InvalidInput(name() + ": " + what + " is not finite");
 }
 
 void check_collider(const Collider& collider, std::size_t position) {
-  const std::string name =
-      "collider " + std::to_string(position) + " (" + kind_of(collider) + ")";
+  const ColliderName name{collider, position};
   std::visit(
       [&](const auto& shape) {
         using Shape = std::decay_t<decltype(shape)>;
         if constexpr (std::is_same_v<Shape, PlaneCollider>) {
           check_finite(shape.normal, name, "normal");
-          if (!std::isfinite(shape.offset)) throw InvalidInput(name + ": offset is not finite");
+          if (!std::isfinite(shape.offset)) throw InvalidInput(name() + ": offset is not finite");
           const Real squared = shape.normal.squaredNorm();
           if (!(std::abs(squared - 1) <= kUnitTolerance))
-            throw InvalidInput(name + ": normal must be a unit vector (its length is " +
+            throw InvalidInput(name() + ": normal must be a unit vector (its length is " +
                                std::to_string(std::sqrt(squared)) + ")");
         } else if constexpr (std::is_same_v<Shape, SphereCollider>) {
           check_finite(shape.centre, name, "centre");
@@ -132,13 +142,13 @@ void check_collider(const Collider& collider, std::size_t position) {
         } else if constexpr (std::is_same_v<Shape, BoxCollider>) {
           check_finite(shape.centre, name, "centre");
           check_finite(shape.half_extents, name, "half extents");
-          if (!shape.rotation.allFinite()) throw InvalidInput(name + ": rotation is not finite");
+          if (!shape.rotation.allFinite()) throw InvalidInput(name() + ": rotation is not finite");
           if ((shape.half_extents.array() < 0).any())
-            throw InvalidInput(name + ": a half extent is negative");
+            throw InvalidInput(name() + ": a half extent is negative");
           const Real error = (shape.rotation.transpose() * shape.rotation -
                               Matrix3r::Identity()).cwiseAbs().maxCoeff();
           if (!(error <= kUnitTolerance) || !(shape.rotation.determinant() > 0))
-            throw InvalidInput(name +
+            throw InvalidInput(name() +
                                ": rotation is not a rotation (its columns must be orthonormal "
                                "and its determinant +1)");
         } else if constexpr (std::is_same_v<Shape, CapsuleCollider>) {

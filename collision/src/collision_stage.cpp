@@ -40,9 +40,7 @@ struct CollisionStage::Buffers {
   ColliderHits hits;
   std::unique_ptr<SelfCollision> self;
   SelfCollision::Contacts self_contacts;
-  /// The self-contacts of the last detection, kept for the substeps until the next.
-  SelfCollisionConstraints self_constraints;
-  ParticleTetContacts solid_constraints;
+  SolidContactScratch solid_scratch;
   /// The faces of the solids among the surface triangles (null without solids).
   std::unique_ptr<SolidSurface> solids;
   std::vector<ParticleIndex> distance_contacts;
@@ -80,15 +78,28 @@ CollisionStage& CollisionStage::operator=(CollisionStage&&) noexcept = default;
 void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
                             ConstraintSets& contacts) {
   const auto start = std::chrono::steady_clock::now();
-  contacts = ConstraintSets();
   Buffers& buffers = *buffers_;
+  // The families this stage makes are rebuilt into `contacts` below, keeping their arrays'
+  // capacity (a substep in steady state allocates nothing); every other family is emptied.
+  const auto rebuilt = [&](ConstraintFamily family) {
+    switch (family) {
+      case ConstraintFamily::collider_contact: return true;
+      case ConstraintFamily::triangle_point_distance:
+      case ConstraintFamily::edge_edge_distance: return buffers.self != nullptr;
+      case ConstraintFamily::particle_tet_contact: return buffers.self && buffers.solids;
+      default: return false;
+    }
+  };
+  contacts.for_each([&](ConstraintFamily family, auto& batch) {
+    if (!rebuilt(family) && batch.size() != 0) batch = {};
+  });
   // A contact reaches one thickness beyond the contact distance, so a particle the
   // iterations push towards a collider (or a layer) still finds the contact made for it.
   const Real margin = settings_.thickness;
 
   find_collider_contacts(settings_.colliders, state, settings_.thickness, margin, buffers.hits);
   const std::size_t hit_count = buffers.hits.particles.size();
-  if (hit_count != 0) {
+  {
     // Slow approaches do not bounce (resting contacts would jitter): an approach slower
     // than what gravity adds in two substeps gets e = 0.
     const Real slow = 2 * gravity * h;
@@ -101,7 +112,7 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
                                .static_friction = settings_.static_friction,
                                .dynamic_friction = settings_.dynamic_friction,
                                .restitution = settings_.restitution};
-    contacts.collider_contact = make_collider_contacts(input);
+    make_collider_contacts(input, contacts.collider_contact);
     auto& made = contacts.collider_contact;
     for (std::size_t c = 0; c < hit_count; ++c)
       if (-buffers.hits.normal_speeds[c] <= slow) made.restitution[c] = 0;
@@ -150,21 +161,17 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
       // Edge pairs of two solids are dropped (solid_contacts.hpp).
       split_solid_contacts(*buffers.solids, buffers.self_contacts, state, settings_.thickness,
                            settings_.dynamic_friction, buffers.distance_contacts,
-                           buffers.solid_constraints);
+                           contacts.particle_tet_contact, &buffers.solid_scratch);
       buffers.self_contacts.triangle_point.swap(buffers.distance_contacts);
       buffers.self_contacts.triangle_point_triangle.clear();
       drop_solid_edge_pairs(*buffers.solids, buffers.self_contacts.edge_edge);
     }
-    buffers.self_constraints =
-        make_self_collision_constraints(buffers.self_contacts, state.size(), self);
-    contacts.triangle_point_distance = buffers.self_constraints.triangle_point;
-    contacts.edge_edge_distance = buffers.self_constraints.edge_edge;
+    make_self_collision_constraints(buffers.self_contacts, state.size(), self,
+                                    contacts.triangle_point_distance,
+                                    contacts.edge_edge_distance);
     statistics_.vertex_triangle_contacts = buffers.self_contacts.triangle_point_count();
     statistics_.edge_edge_contacts = buffers.self_contacts.edge_edge_count();
-    if (buffers.solids) {
-      contacts.particle_tet_contact = buffers.solid_constraints;
-      statistics_.particle_tet_contacts = buffers.solid_constraints.size();
-    }
+    if (buffers.solids) statistics_.particle_tet_contacts = contacts.particle_tet_contact.size();
   }
 
   ++statistics_.substeps;

@@ -705,19 +705,28 @@ void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
   for (const Chunks::Count& count : chunks_->measured) measured_candidates_ += count.measured;
 }
 
-SelfCollisionConstraints make_self_collision_constraints(const SelfCollision::Contacts& contacts,
-                                                         std::size_t particle_count,
-                                                         const SelfCollisionSettings& settings) {
+void make_self_collision_constraints(const SelfCollision::Contacts& contacts,
+                                     std::size_t particle_count,
+                                     const SelfCollisionSettings& settings,
+                                     TrianglePointDistanceConstraints& triangle_point,
+                                     EdgeEdgeDistanceConstraints& edge_edge) {
   ProximityDistanceConstraintInput input;
   input.particle_count = particle_count;
   input.rest_distance = settings.thickness;
   input.compression_stiffness = settings.stiffness;
   input.stretch_stiffness = 0;
-  SelfCollisionConstraints result;
   input.particles = contacts.triangle_point;
-  result.triangle_point = make_triangle_point_distance_constraints(input);
+  make_triangle_point_distance_constraints(input, triangle_point);
   input.particles = contacts.edge_edge;
-  result.edge_edge = make_edge_edge_distance_constraints(input);
+  make_edge_edge_distance_constraints(input, edge_edge);
+}
+
+SelfCollisionConstraints make_self_collision_constraints(const SelfCollision::Contacts& contacts,
+                                                         std::size_t particle_count,
+                                                         const SelfCollisionSettings& settings) {
+  SelfCollisionConstraints result;
+  make_self_collision_constraints(contacts, particle_count, settings, result.triangle_point,
+                                  result.edge_edge);
   return result;
 }
 

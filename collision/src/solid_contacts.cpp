@@ -131,10 +131,11 @@ bool projects_inside(const Vector3r& p, const Vector3r& a, const Vector3r& b, co
 void split_solid_contacts(const SolidSurface& surface, const SelfCollision::Contacts& contacts,
                           const ParticleState& state, Real thickness, Real friction,
                           std::vector<ParticleIndex>& remaining_triangle_point,
-                          ParticleTetContacts& particle_tet) {
+                          ParticleTetContacts& particle_tet, SolidContactScratch* scratch) {
   remaining_triangle_point.clear();
-  std::vector<ParticleIndex> particles;
-  std::vector<Vector3r> barycentric, normals;
+  SolidContactScratch local;
+  auto& [particles, barycentric, normals] = scratch ? *scratch : local;
+  particles.clear(), barycentric.clear(), normals.clear();
   const bool has_start = state.previous_x.size() == state.size();
   const auto start = [&](std::uint32_t i) {
     return has_start ? Vector3r(state.previous_x[i], state.previous_y[i], state.previous_z[i])
@@ -188,9 +189,9 @@ void split_solid_contacts(const SolidSurface& surface, const SelfCollision::Cont
     }
     if (!made) remaining_triangle_point.insert(remaining_triangle_point.end(), contact, contact + 4);
   }
-  particle_tet = make_particle_tet_contacts(
+  make_particle_tet_contacts(
       {.particles = particles, .barycentric = barycentric, .normals = normals, .friction = friction},
-      state);
+      state, particle_tet);
 }
 
 void drop_solid_edge_pairs(const SolidSurface& surface, std::vector<ParticleIndex>& edge_edge) {

@@ -113,15 +113,14 @@ Vector3r vec3_of(const std::array<AlignedVector<Real>, 3>& arrays, std::size_t c
 
 }  // namespace
 
-ColliderContacts make_collider_contacts(const ColliderContactInput& input) {
+void make_collider_contacts(const ColliderContactInput& input, ColliderContacts& result) {
   const detail::ConstraintValidator validator(ColliderContacts::kFamily, input.particle_count);
   validator.check_parameter("static friction", input.static_friction);
   validator.check_parameter("dynamic friction", input.dynamic_friction);
   if (!(input.restitution >= 0 && input.restitution <= 1))
     validator.fail_input("restitution is " + detail::describe(input.restitution) +
                          ", must lie in [0, 1]");
-  ColliderContacts result;
-  result.particles = validator.particles<1>(input.particles);
+  validator.fill_particles(result.particles, input.particles);
   const std::size_t n = result.size();
   if (input.normals.size() != n || input.offsets.size() != n || input.anchors.size() != n ||
       input.normal_speeds.size() != n)
@@ -130,10 +129,10 @@ ColliderContacts make_collider_contacts(const ColliderContactInput& input) {
                          std::to_string(input.offsets.size()) + " offsets, " +
                          std::to_string(input.anchors.size()) + " anchors and " +
                          std::to_string(input.normal_speeds.size()) + " normal speeds");
-  for (auto& a : result.normal) a = detail::filled(n, 0);
-  for (auto& a : result.anchor) a = detail::filled(n, 0);
-  result.offset = detail::filled(n, 0);
-  result.normal_speed = detail::filled(n, 0);
+  for (auto& a : result.normal) detail::fill(a, n, 0);
+  for (auto& a : result.anchor) detail::fill(a, n, 0);
+  detail::fill(result.offset, n, 0);
+  detail::fill(result.normal_speed, n, 0);
   for (std::size_t c = 0; c < n; ++c) {
     const Vector3r& normal = input.normals[c];
     if (!normal.allFinite()) validator.fail(c, "normal is not finite");
@@ -146,10 +145,15 @@ ColliderContacts make_collider_contacts(const ColliderContactInput& input) {
     result.offset[c] = input.offsets[c];
     result.normal_speed[c] = input.normal_speeds[c];
   }
-  result.static_friction = detail::filled(n, input.static_friction);
-  result.dynamic_friction = detail::filled(n, input.dynamic_friction);
-  result.restitution = detail::filled(n, input.restitution);
-  result.lambda = detail::filled(n, 0);
+  detail::fill(result.static_friction, n, input.static_friction);
+  detail::fill(result.dynamic_friction, n, input.dynamic_friction);
+  detail::fill(result.restitution, n, input.restitution);
+  detail::fill(result.lambda, n, 0);
+}
+
+ColliderContacts make_collider_contacts(const ColliderContactInput& input) {
+  ColliderContacts result;
+  make_collider_contacts(input, result);
   return result;
 }
 

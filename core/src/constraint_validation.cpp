@@ -8,11 +8,11 @@
 namespace tessera::detail {
 
 void ConstraintValidator::fail(std::size_t constraint, const std::string& problem) const {
-  throw InvalidInput(family_ + " constraint " + std::to_string(constraint) + ": " + problem);
+  throw InvalidInput(std::string(family_) + " constraint " + std::to_string(constraint) + ": " + problem);
 }
 
 void ConstraintValidator::fail_input(const std::string& problem) const {
-  throw InvalidInput(family_ + " constraints: " + problem);
+  throw InvalidInput(std::string(family_) + " constraints: " + problem);
 }
 
 void ConstraintValidator::fail_out_of_range(std::size_t constraint, ParticleIndex index) const {

@@ -18,10 +18,12 @@ namespace tessera::detail {
 
 class ConstraintValidator {
  public:
-  ConstraintValidator(std::string family, std::size_t particle_count)
-      : family_(std::move(family)), particle_count_(particle_count) {}
+  /// `family` is a family's kFamily (a string literal); kept as a pointer, so a validator
+  /// costs no allocation (the collision stage builds its contact batches every substep).
+  ConstraintValidator(const char* family, std::size_t particle_count)
+      : family_(family), particle_count_(particle_count) {}
 
-  const std::string& family() const { return family_; }
+  const char* family() const { return family_; }
   std::size_t particle_count() const { return particle_count_; }
 
   /// Throws InvalidInput "<family> constraint <index>: <problem>".
@@ -40,10 +42,16 @@ class ConstraintValidator {
   /// length, that every index is in range and that no constraint names a particle twice.
   template <int N>
   ConstraintParticles<N> particles(std::span<const ParticleIndex> flat) const {
+    ConstraintParticles<N> result;
+    fill_particles(result, flat);
+    return result;
+  }
+  /// The same into `result`, whose slot arrays keep their capacity.
+  template <int N>
+  void fill_particles(ConstraintParticles<N>& result, std::span<const ParticleIndex> flat) const {
     if (flat.size() % N != 0)
       fail_input(std::to_string(flat.size()) + " particle indices is not a multiple of " +
                  std::to_string(N));
-    ConstraintParticles<N> result;
     result.count = flat.size() / N;
     result.particle_count = particle_count_;
     for (auto& slot : result.particle) slot.assign(padded_size(result.count), 0);
@@ -56,7 +64,6 @@ class ConstraintValidator {
         result.particle[k][c] = index;
       }
     }
-    return result;
   }
 
   /// The rest positions of constraint c's N particles, each checked to be finite.
@@ -79,17 +86,23 @@ class ConstraintValidator {
   [[noreturn]] void fail_repeated(std::size_t constraint, ParticleIndex index) const;
 
  private:
-  std::string family_;
+  const char* family_;
   std::size_t particle_count_;
 };
 
 /// A value as the validation messages print it (e.g. "-1", "nan", "inf").
 std::string describe(Real value);
 
+/// Makes `out` n values all equal to value, padded with zeros (its capacity is kept).
+inline void fill(AlignedVector<Real>& out, std::size_t n, Real value) {
+  out.assign(padded_size(n), Real(0));
+  std::fill(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(n), value);
+}
+
 /// A padded copy of n values all equal to value.
 inline AlignedVector<Real> filled(std::size_t n, Real value) {
-  AlignedVector<Real> result(padded_size(n), Real(0));
-  std::fill(result.begin(), result.begin() + static_cast<std::ptrdiff_t>(n), value);
+  AlignedVector<Real> result;
+  fill(result, n, value);
   return result;
 }
 

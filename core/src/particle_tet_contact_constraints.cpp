@@ -180,21 +180,20 @@ bool is_unit(const Vector3r& n) {
 
 }  // namespace
 
-ParticleTetContacts make_particle_tet_contacts(const ParticleTetContactInput& input,
-                                               const ParticleState& state) {
+void make_particle_tet_contacts(const ParticleTetContactInput& input, const ParticleState& state,
+                                ParticleTetContacts& result) {
   const detail::ConstraintValidator validator(ParticleTetContacts::kFamily, state.size());
   validator.check_parameter("friction", input.friction);
-  ParticleTetContacts result;
-  result.particles = validator.particles<5>(input.particles);
+  validator.fill_particles(result.particles, input.particles);
   const std::size_t n = result.size();
   if (input.barycentric.size() != n || input.normals.size() != n)
     validator.fail_input(std::to_string(n) + " contacts but " +
                          std::to_string(input.barycentric.size()) +
                          " barycentric coordinates and " + std::to_string(input.normals.size()) +
                          " normals");
-  for (auto& a : result.barycentric) a = detail::filled(n, 0);
-  for (auto& a : result.normal) a = detail::filled(n, 0);
-  for (auto& a : result.tangent) a = detail::filled(n, 0);
+  for (auto& a : result.barycentric) detail::fill(a, n, 0);
+  for (auto& a : result.normal) detail::fill(a, n, 0);
+  for (auto& a : result.tangent) detail::fill(a, n, 0);
   for (std::size_t c = 0; c < n; ++c) {
     const Vector3r& bary = input.barycentric[c];
     const Vector3r& normal = input.normals[c];
@@ -212,15 +211,21 @@ ParticleTetContacts make_particle_tet_contacts(const ParticleTetContactInput& in
       result.normal[std::size_t(k)][c] = normal[k];
     }
   }
-  result.effective_mass = detail::filled(n, 0);
-  result.max_tangential_impulse = detail::filled(n, 0);
-  result.normal_speed = detail::filled(n, 0);
-  result.friction = detail::filled(n, input.friction);
-  result.lambda = detail::filled(n, 0);
+  detail::fill(result.effective_mass, n, 0);
+  detail::fill(result.max_tangential_impulse, n, 0);
+  detail::fill(result.normal_speed, n, 0);
+  detail::fill(result.friction, n, input.friction);
+  detail::fill(result.lambda, n, 0);
   if (n > 0) {
     ParticleState& velocities = const_cast<ParticleState&>(state);  // only read by init
     HWY_DYNAMIC_DISPATCH(InitParticleTetContacts)(velocity_arrays_of(velocities), result);
   }
+}
+
+ParticleTetContacts make_particle_tet_contacts(const ParticleTetContactInput& input,
+                                               const ParticleState& state) {
+  ParticleTetContacts result;
+  make_particle_tet_contacts(input, state, result);
   return result;
 }
 

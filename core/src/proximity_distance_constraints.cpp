@@ -129,28 +129,27 @@ namespace {
 /// The builder of every proximity family: its indices, a rest distance (shared or one per
 /// constraint, each ≥ 0) and the compression and stretch stiffness.
 template <class Constraints>
-Constraints make_proximity_constraints(const ProximityDistanceConstraintInput& input) {
+void make_proximity_constraints(const ProximityDistanceConstraintInput& input,
+                                Constraints& result) {
   const detail::ConstraintValidator validator(Constraints::kFamily, input.particle_count);
   validator.check_parameter("compression stiffness", input.compression_stiffness);
   validator.check_parameter("stretch stiffness", input.stretch_stiffness);
-  Constraints result;
-  result.particles = validator.particles<Constraints::kParticles>(input.particles);
+  validator.fill_particles(result.particles, input.particles);
   const std::size_t n = result.size();
   const bool per_constraint = !input.rest_distances.empty();
   if (per_constraint && input.rest_distances.size() != n)
     validator.fail_input(std::to_string(input.rest_distances.size()) + " rest distances for " +
                          std::to_string(n) + " constraints");
   if (!per_constraint) validator.check_parameter("rest distance", input.rest_distance);
-  result.rest_distance = detail::filled(n, input.rest_distance);
+  detail::fill(result.rest_distance, n, input.rest_distance);
   if (per_constraint) {
     for (std::size_t c = 0; c < n; ++c) {
       validator.check_non_negative(c, "rest distance", input.rest_distances[c]);
       result.rest_distance[c] = input.rest_distances[c];
     }
   }
-  result.compression_stiffness = detail::filled(n, input.compression_stiffness);
-  result.stretch_stiffness = detail::filled(n, input.stretch_stiffness);
-  return result;
+  detail::fill(result.compression_stiffness, n, input.compression_stiffness);
+  detail::fill(result.stretch_stiffness, n, input.stretch_stiffness);
 }
 
 /// The checks every proximity entry point makes before dispatching: the range and particle
@@ -175,19 +174,40 @@ HWY_EXPORT(EdgePointDistanceResiduals);
 HWY_EXPORT(TrianglePointDistanceResiduals);
 HWY_EXPORT(EdgeEdgeDistanceResiduals);
 
+void make_edge_point_distance_constraints(const ProximityDistanceConstraintInput& input,
+                                  EdgePointDistanceConstraints& out) {
+  make_proximity_constraints(input, out);
+}
+
 EdgePointDistanceConstraints make_edge_point_distance_constraints(
     const ProximityDistanceConstraintInput& input) {
-  return make_proximity_constraints<EdgePointDistanceConstraints>(input);
+  EdgePointDistanceConstraints result;
+  make_proximity_constraints(input, result);
+  return result;
+}
+
+void make_triangle_point_distance_constraints(const ProximityDistanceConstraintInput& input,
+                                  TrianglePointDistanceConstraints& out) {
+  make_proximity_constraints(input, out);
 }
 
 TrianglePointDistanceConstraints make_triangle_point_distance_constraints(
     const ProximityDistanceConstraintInput& input) {
-  return make_proximity_constraints<TrianglePointDistanceConstraints>(input);
+  TrianglePointDistanceConstraints result;
+  make_proximity_constraints(input, result);
+  return result;
+}
+
+void make_edge_edge_distance_constraints(const ProximityDistanceConstraintInput& input,
+                                  EdgeEdgeDistanceConstraints& out) {
+  make_proximity_constraints(input, out);
 }
 
 EdgeEdgeDistanceConstraints make_edge_edge_distance_constraints(
     const ProximityDistanceConstraintInput& input) {
-  return make_proximity_constraints<EdgeEdgeDistanceConstraints>(input);
+  EdgeEdgeDistanceConstraints result;
+  make_proximity_constraints(input, result);
+  return result;
 }
 
 void project_edge_point_distance_constraints(ParticleArrays particles,

@@ -23,12 +23,18 @@ void for_each_particle(const Batch& batch, std::size_t j, Visit&& visit) {
 
 }  // namespace
 
-ColouredContacts colour_contacts(const ConstraintSets& found,
-                                 std::span<std::uint64_t> contact_masks,
-                                 std::span<const Real> inverse_mass) {
-  ColouredContacts result;
+void colour_contacts(const ConstraintSets& found, std::span<std::uint64_t> contact_masks,
+                     std::span<const Real> inverse_mass, ColouredContacts& result) {
+  result.blocks.clear();
+  result.colour_offsets.assign(1, 0);
+  for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
+    result.ranges[f].clear();
+    result.source[f].clear();
+    result.overflow[f].clear();
+  }
+  result.constraint_count = 0;
+  auto& [colour_of, by_colour_offsets, by_colour, next] = result.scratch;
   // 1. Each contact's colour, first-fit in the stage's order (kContactColours: overflow).
-  std::array<std::vector<std::uint8_t>, kConstraintFamilyCount> colour_of;
   std::size_t colours = 0;
   found.for_each([&](ConstraintFamily family, const auto& batch) {
     auto& colour = colour_of[std::size_t(family)];
@@ -60,8 +66,6 @@ ColouredContacts colour_contacts(const ConstraintSets& found,
 
   // 2. Slots colour by colour, each family's range of a colour starting on a kMaxLanes
   //    boundary (a counting sort by colour keeps the stage's order inside a colour).
-  std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> by_colour_offsets;
-  std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> by_colour;
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
     const auto& colour = colour_of[f];
     auto& offsets = by_colour_offsets[f];
@@ -69,7 +73,7 @@ ColouredContacts colour_contacts(const ConstraintSets& found,
     for (const std::uint8_t k : colour) ++offsets[std::min<std::size_t>(k, colours) + 1];
     for (std::size_t k = 0; k <= colours; ++k) offsets[k + 1] += offsets[k];
     by_colour[f].resize(colour.size());
-    std::vector<std::uint32_t> next(offsets.begin(), offsets.end() - 1);
+    next.assign(offsets.begin(), offsets.end() - 1);
     for (std::size_t j = 0; j < colour.size(); ++j)
       by_colour[f][next[std::min<std::size_t>(colour[j], colours)]++] = std::uint32_t(j);
   }
@@ -94,10 +98,10 @@ ColouredContacts colour_contacts(const ConstraintSets& found,
   const std::size_t particle_count = inverse_mass.size();
   result.constraints.for_each([&](ConstraintFamily family, auto& batch) {
     using Batch = std::decay_t<decltype(batch)>;
-    batch = reorder_batch(found.of_type<Batch>(), result.source[std::size_t(family)], kNoContact,
-                          particle_count, [](std::size_t, std::size_t, ParticleIndex p) { return p; });
+    reorder_batch_into(batch, found.of_type<Batch>(), result.source[std::size_t(family)],
+                       kNoContact, particle_count,
+                       [](std::size_t, std::size_t, ParticleIndex p) { return p; });
   });
-  return result;
 }
 
 }  // namespace tessera::detail

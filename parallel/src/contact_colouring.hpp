@@ -50,6 +50,14 @@ struct ColouredContacts {
   /// Per family, the contacts that found no colour (indices into the found batch), in order.
   std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> overflow;
   std::size_t constraint_count = 0;
+  /// colour_contacts' working lists, kept with the result so that colouring each substep's
+  /// contacts into the same ColouredContacts allocates nothing once the contacts stop growing.
+  struct Scratch {
+    std::array<std::vector<std::uint8_t>, kConstraintFamilyCount> colour_of;
+    std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> by_colour_offsets;
+    std::array<std::vector<std::uint32_t>, kConstraintFamilyCount> by_colour;
+    std::vector<std::uint32_t> next;
+  } scratch;
   std::size_t colour_count() const { return colour_offsets.size() - 1; }
   std::span<const ScheduleBlock> colour_blocks(std::size_t k) const {
     return {blocks.data() + colour_offsets[k], blocks.data() + colour_offsets[k + 1]};
@@ -57,11 +65,11 @@ struct ColouredContacts {
 };
 inline constexpr std::uint32_t kNoContact = ~std::uint32_t(0);
 
-/// Colours `found` (in the schedule's numbering). `contact_masks` is scratch of one word per
+/// Colours `found` (in the schedule's numbering) into `result`, whose earlier contents are
+/// replaced (its arrays keep their capacity). `contact_masks` is scratch of one word per
 /// particle, all zero, and left all zero. Each colour holds one block per family (the solver
 /// cuts it into one share per thread).
-ColouredContacts colour_contacts(const ConstraintSets& found,
-                                 std::span<std::uint64_t> contact_masks,
-                                 std::span<const Real> inverse_mass);
+void colour_contacts(const ConstraintSets& found, std::span<std::uint64_t> contact_masks,
+                     std::span<const Real> inverse_mass, ColouredContacts& result);
 
 }  // namespace tessera::detail

@@ -39,12 +39,13 @@ using Layouts = std::array<IncidenceLayout, kConstraintFamilyCount>;
 /// together in every slot array, and the per-particle sums read memory almost in order (in
 /// colour order they jumped across the whole set).
 void sort_by_smallest_particle(const ConstraintSets& sets, SourceLists& source_of_family,
-                               const Renumber& renumber) {
+                               const Renumber& renumber,
+                               std::vector<std::pair<ParticleIndex, std::uint32_t>>& keyed) {
   sets.for_each([&](ConstraintFamily family, const auto& batch) {
     using Batch = std::decay_t<decltype(batch)>;
     auto& source = source_of_family[std::size_t(family)];
     if (source.empty()) return;
-    std::vector<std::pair<ParticleIndex, std::uint32_t>> keyed(source.size());
+    keyed.resize(source.size());
     for (std::size_t j = 0; j < source.size(); ++j) {
       ParticleIndex smallest = std::numeric_limits<ParticleIndex>::max();
       if constexpr (kFixedArity<Batch>) {
@@ -100,8 +101,8 @@ void fill_set(JacobiSet& jacobi, const ConstraintSets& sets, const SourceLists& 
       real_incidence[incidence] = 1;
       return renumber(p);
     };
-    batch = reorder_batch(sets.of_type<Batch>(), source, kNoPadding, particle_count,
-                          renumber_and_record);
+    reorder_batch_into(batch, sets.of_type<Batch>(), source, kNoPadding, particle_count,
+                       renumber_and_record);
     split_into_blocks(family, 0, source.size(), options, jacobi.blocks);
     jacobi.constraint_count += source.size();
   });
@@ -109,10 +110,12 @@ void fill_set(JacobiSet& jacobi, const ConstraintSets& sets, const SourceLists& 
 
 /// Each movable particle's incidences, ascending (a counting sort by particle); returns the
 /// count per particle (count[p + 1] for particle p).
-std::vector<std::uint32_t> index_particles(JacobiSet& jacobi, std::size_t particle_count,
-                                           const Movable& movable,
-                                           const std::vector<std::uint8_t>& real_incidence) {
-  std::vector<std::uint32_t> count(particle_count + 1, 0);
+/// Fills `count` (particle p's counted incidences at p + 1) and the set's particle lists;
+/// `start` is scratch.
+void index_particles(JacobiSet& jacobi, std::size_t particle_count, const Movable& movable,
+                     const std::vector<std::uint8_t>& real_incidence,
+                     std::vector<std::uint32_t>& count, std::vector<std::uint32_t>& start) {
+  count.assign(particle_count + 1, 0);
   const auto counted = [&](std::size_t i) {
     return real_incidence[i] && movable(jacobi.incidence_particle[i]);
   };
@@ -120,7 +123,7 @@ std::vector<std::uint32_t> index_particles(JacobiSet& jacobi, std::size_t partic
     if (counted(i)) ++count[jacobi.incidence_particle[i] + 1];
   for (std::size_t p = 0; p < particle_count; ++p)
     if (count[p + 1] != 0) jacobi.particles.push_back(ParticleIndex(p));
-  std::vector<std::uint32_t> start(particle_count + 1, 0);
+  start.assign(particle_count + 1, 0);
   for (std::size_t p = 0; p < particle_count; ++p) start[p + 1] = start[p] + count[p + 1];
   jacobi.particle_incidences.resize(start[particle_count]);
   jacobi.particle_offsets.reserve(jacobi.particles.size() + 1);
@@ -128,7 +131,6 @@ std::vector<std::uint32_t> index_particles(JacobiSet& jacobi, std::size_t partic
   jacobi.particle_offsets.push_back(start[particle_count]);
   for (std::size_t i = 0; i < jacobi.incidence_count; ++i)
     if (counted(i)) jacobi.particle_incidences[start[jacobi.incidence_particle[i]]++] = std::uint32_t(i);
-  return count;
 }
 
 /// λ shares: the mean count over each constraint's movable incidences (JacobiSet::lambda_share).
@@ -136,6 +138,7 @@ void lambda_shares(JacobiSet& jacobi, const Movable& movable,
                    const std::vector<std::uint32_t>& count) {
   jacobi.constraints.for_each([&](ConstraintFamily family, auto& batch) {
     using Batch = std::decay_t<decltype(batch)>;
+    jacobi.lambda_share[std::size_t(family)].clear();
     if constexpr (Batch::kTraits.xpbd && kFixedArity<Batch>) {
       if (batch.size() == 0) return;
       auto& share = jacobi.lambda_share[std::size_t(family)];
@@ -157,20 +160,34 @@ void lambda_shares(JacobiSet& jacobi, const Movable& movable,
 
 }  // namespace
 
-JacobiSet build_jacobi_set(const ConstraintSets& sets, SourceLists& source_of_family,
-                           std::size_t particle_count, const Renumber& renumber,
-                           const Movable& movable, const ScheduleOptions& options) {
-  JacobiSet jacobi;
-  sort_by_smallest_particle(sets, source_of_family, renumber);
+void build_jacobi_set(JacobiSet& jacobi, JacobiSetScratch& scratch, const ConstraintSets& sets,
+                      SourceLists& source_of_family, std::size_t particle_count,
+                      const Renumber& renumber, const Movable& movable,
+                      const ScheduleOptions& options) {
+  jacobi.particles.clear();
+  jacobi.particle_offsets.clear();
+  jacobi.blocks.clear();
+  jacobi.constraint_count = 0;
+  sort_by_smallest_particle(sets, source_of_family, renumber, scratch.keyed);
   std::size_t incidences = 0;
   const Layouts layout = lay_out_incidences(sets, source_of_family, incidences);
   jacobi.incidence_count = padded_size(incidences);
   jacobi.incidence_particle.assign(jacobi.incidence_count, 0);
-  std::vector<std::uint8_t> real_incidence(jacobi.incidence_count, 0);
+  scratch.real_incidence.assign(jacobi.incidence_count, 0);
   fill_set(jacobi, sets, source_of_family, layout, particle_count, renumber, options,
-           real_incidence);
-  const auto count = index_particles(jacobi, particle_count, movable, real_incidence);
-  lambda_shares(jacobi, movable, count);
+           scratch.real_incidence);
+  index_particles(jacobi, particle_count, movable, scratch.real_incidence, scratch.count,
+                  scratch.start);
+  lambda_shares(jacobi, movable, scratch.count);
+}
+
+JacobiSet build_jacobi_set(const ConstraintSets& sets, SourceLists& source_of_family,
+                           std::size_t particle_count, const Renumber& renumber,
+                           const Movable& movable, const ScheduleOptions& options) {
+  JacobiSet jacobi;
+  JacobiSetScratch scratch;
+  build_jacobi_set(jacobi, scratch, sets, source_of_family, particle_count, renumber, movable,
+                   options);
   return jacobi;
 }
 

@@ -1004,31 +1004,41 @@ void Solver::set_dynamic_constraints(ConstraintSets constraints) {
                          " particles, the model has " + std::to_string(state_.size()));
   });
   dynamic_count_ = constraints.size();
-  dynamic_ = extra_set(constraints, dynamic_source_, false);
+  extra_set(constraints, dynamic_source_, false, dynamic_);
   dynamic_work_.bind(dynamic_);
   build_stages();
 }
 
-JacobiSet Solver::extra_set(const ConstraintSets& constraints,
-                            std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>& source,
-                            bool scheduled_numbering) {
+void Solver::extra_set(const ConstraintSets& constraints,
+                       std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>& source,
+                       bool scheduled_numbering, JacobiSet& set) {
   const auto sizes = constraints.sizes();
   if (settings_.mode == SolverMode::sequential) {
-    // Swept as given, family by family (the user's numbering is the solver's).
-    JacobiSet set;
-    source = {};
+    // Swept as given, family by family (the user's numbering is the solver's). Copied into
+    // the set's own arrays (a copy assignment keeps their capacity).
+    for (auto& list : source) list.clear();
+    set.incidence_base = {};
+    set.incidence_stride = {};
+    set.incidence_particle.clear();
+    set.incidence_count = 0;
+    set.particles.clear();
+    set.particle_offsets.clear();
+    set.particle_incidences.clear();
+    for (auto& share : set.lambda_share) share.clear();
+    set.blocks.clear();
     for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
       if (sizes[f] != 0) set.blocks.push_back({ConstraintFamily(f), 0, std::uint32_t(sizes[f])});
     set.constraint_count = constraints.size();
     set.constraints = constraints;
-    return set;
+    return;
   }
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f) {
     source[f].resize(sizes[f]);
     for (std::size_t i = 0; i < sizes[f]; ++i) source[f][i] = std::uint32_t(i);
   }
-  return detail::build_jacobi_set(
-      constraints, source, state_.size(),
+  if (!jacobi_scratch_) jacobi_scratch_ = std::make_unique<detail::JacobiSetScratch>();
+  detail::build_jacobi_set(
+      set, *jacobi_scratch_, constraints, source, state_.size(),
       [&](ParticleIndex p) { return scheduled_numbering ? p : schedule_.scheduled_particle(p); },
       [&](ParticleIndex scheduled) { return state_.inverse_mass[scheduled] > 0; },
       schedule_.options());
@@ -1084,32 +1094,35 @@ void Solver::clear_collisions() {
 }
 
 void Solver::detect_contacts(Real h) {
-  contacts_found_ = ConstraintSets();
   arena_->execute(
       [&] { collisions_->detect(state_, h, Real(settings_.gravity.norm()), contacts_found_); });
   // The contacts come in the schedule's numbering, sorted by particle: the sets' order is
   // theirs, whatever the thread count.
   const auto start = Clock::now();
   if (!colours_contacts()) {
-    contacts_ = extra_set(contacts_found_, contact_source_, true);
+    extra_set(contacts_found_, contact_source_, true, contacts_);
   } else {
-    contact_colours_ = std::make_unique<detail::ColouredContacts>(detail::colour_contacts(
-        contacts_found_, contact_masks_, inverse_masses()));
+    // Coloured into the same buffers every substep: no allocation once the contacts stop
+    // growing.
+    if (!contact_colours_) contact_colours_ = std::make_unique<detail::ColouredContacts>();
+    detail::colour_contacts(contacts_found_, contact_masks_, inverse_masses(), *contact_colours_);
     // The overflow as a Jacobi set; its slots lead back to the found contacts.
-    ConstraintSets overflow;
     std::size_t overflowed = 0;
-    overflow.for_each([&](ConstraintFamily family, auto& batch) {
+    contact_overflow_.for_each([&](ConstraintFamily family, auto& batch) {
       using Batch = std::decay_t<decltype(batch)>;
       const auto& list = contact_colours_->overflow[std::size_t(family)];
       overflowed += list.size();
-      if (list.empty()) return;
-      batch = detail::reorder_batch(contacts_found_.of_type<Batch>(), list, detail::kNoContact,
-                                    state_.size(),
-                                    [](std::size_t, std::size_t, ParticleIndex p) { return p; });
+      detail::reorder_batch_into(batch, contacts_found_.of_type<Batch>(), list,
+                                 detail::kNoContact, state_.size(),
+                                 [](std::size_t, std::size_t, ParticleIndex p) { return p; });
     });
-    contacts_ = JacobiSet();
-    contact_source_ = {};
-    if (overflowed != 0) contacts_ = extra_set(overflow, contact_source_, true);
+    if (overflowed != 0) {
+      extra_set(contact_overflow_, contact_source_, true, contacts_);
+    } else if (contacts_.constraint_count != 0 || !contacts_.blocks.empty()) {
+      contacts_ = JacobiSet();
+    }
+    if (overflowed == 0)
+      for (auto& list : contact_source_) list.clear();
     for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
       for (std::uint32_t& s : contact_source_[f]) s = contact_colours_->overflow[f][s];
     const std::size_t colours = contact_colours_->colour_count();

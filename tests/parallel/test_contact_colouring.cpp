@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <random>
 #include <set>
+#include <span>
 #include <vector>
 
 #include <tessera/io/generators.hpp>
@@ -39,6 +40,14 @@ DistanceConstraints contacts_between(const std::vector<ParticleIndex>& pairs,
 /// The particles of constraint j of a distance batch.
 std::array<ParticleIndex, 2> ends(const DistanceConstraints& batch, std::size_t j) {
   return {batch.particles.particle[0][j], batch.particles.particle[1][j]};
+}
+
+/// colour_contacts into a new result.
+detail::ColouredContacts colour(const ConstraintSets& found, std::span<std::uint64_t> scratch,
+                                const std::vector<Real>& inverse_mass) {
+  detail::ColouredContacts result;
+  detail::colour_contacts(found, scratch, inverse_mass, result);
+  return result;
 }
 
 void expect_valid(const detail::ColouredContacts& coloured, const ConstraintSets& found,
@@ -85,7 +94,7 @@ TEST(ContactColouring, NoColourMovesAParticleTwice) {
   ConstraintSets found;
   found.distance = contacts_between(pairs, cloth.positions);
   std::vector<std::uint64_t> scratch(cloth.positions.size(), 0);
-  const auto coloured = detail::colour_contacts(found, scratch, cloth.inverse_mass);
+  const auto coloured = colour(found, scratch, cloth.inverse_mass);
   EXPECT_EQ(coloured.constraint_count, found.size());
   expect_valid(coloured, found, cloth.inverse_mass);
   // A movable particle's contacts need a colour each; first-fit finds one among the first
@@ -98,10 +107,30 @@ TEST(ContactColouring, NoColourMovesAParticleTwice) {
   EXPECT_GE(coloured.colour_count(), most);
   EXPECT_LE(coloured.colour_count(), 2 * most - 1);
   for (const std::uint64_t word : scratch) EXPECT_EQ(word, 0u);
-  // The same input gives the same layout.
-  const auto again = detail::colour_contacts(found, scratch, cloth.inverse_mass);
+  // The same input gives the same layout, also coloured into a result that held a larger
+  // substep's contacts before (the solver keeps one and colours each substep into it).
+  ConstraintSets more;
+  more.distance = contacts_between(
+      [&] {
+        std::vector<ParticleIndex> doubled = pairs;
+        const auto count = ParticleIndex(cloth.positions.size());
+        for (const ParticleIndex p : pairs) doubled.insert(doubled.end(), {p, (p + 1) % count});
+        return doubled;
+      }(),
+      cloth.positions);
+  detail::ColouredContacts again = colour(more, scratch, cloth.inverse_mass);
+  ASSERT_GT(again.constraint_count, coloured.constraint_count);
+  detail::colour_contacts(found, scratch, cloth.inverse_mass, again);
   EXPECT_EQ(again.source, coloured.source);
+  EXPECT_EQ(again.overflow, coloured.overflow);
   EXPECT_EQ(again.colour_offsets, coloured.colour_offsets);
+  EXPECT_EQ(again.ranges, coloured.ranges);
+  EXPECT_EQ(again.blocks, coloured.blocks);
+  EXPECT_EQ(again.constraint_count, coloured.constraint_count);
+  EXPECT_EQ(again.constraints.distance.particles.particle, coloured.constraints.distance.particles.particle);
+  EXPECT_EQ(again.constraints.distance.rest_length, coloured.constraints.distance.rest_length);
+  EXPECT_EQ(again.constraints.size(), coloured.constraints.size());
+  expect_valid(again, found, cloth.inverse_mass);
 }
 
 TEST(ContactColouring, AStaticParticleSeparatesNothingAndTheSixtyFifthContactOverflows) {
@@ -114,7 +143,7 @@ TEST(ContactColouring, AStaticParticleSeparatesNothingAndTheSixtyFifthContactOve
   ConstraintSets found;
   found.distance = contacts_between(pairs, cloth.positions);
   std::vector<std::uint64_t> scratch(cloth.positions.size(), 0);
-  const auto coloured = detail::colour_contacts(found, scratch, cloth.inverse_mass);
+  const auto coloured = colour(found, scratch, cloth.inverse_mass);
   expect_valid(coloured, found, cloth.inverse_mass);
   // The 80 contacts on the static particle all take colour 0 (they share nothing movable);
   // then each of 55's contacts takes the next colour its other particle leaves free: colour 0

@@ -3,13 +3,19 @@
 // threads and fragments memory (a long soak once grew by a new malloc arena). This binary
 // replaces the global operator new with a counting one; after two warm-up steps (buffers
 // sized, the phase region made), further steps must not call it, in every mode, on 1 and 2
-// threads, with residual reports and the finite and divergence checks on.
+// threads, with residual reports and the finite and divergence checks on. With a collision
+// stage the contacts are remade every substep into the same buffers: once a scene has
+// settled (its contact counts no longer reach new highs), its steps allocate nothing either,
+// for cloth on colliders and against itself and for solids on solids, with either contact
+// scheduling.
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <cstdlib>
 #include <new>
 
+#include <tessera/io/generators.hpp>
+#include <tessera/io/scenes.hpp>
 #include <tessera/parallel/solver.hpp>
 
 #include "scenes.hpp"
@@ -130,6 +136,98 @@ TEST(StepAllocations, PartMajorSweepsAndChebyshevAllocateNothingPerStep) {
                 0u)
           << "jacobi, chebyshev " << chebyshev << ", " << threads << " threads";
     }
+  }
+}
+
+/// A model with its collision stage's input.
+struct CollisionScene {
+  Model model;
+  std::vector<std::uint32_t> triangles, tetrahedra;
+  CollisionSettings collisions;
+};
+
+/// A free 16 × 16 cloth 0.6 m wide dropped 5 cm onto a sphere and the ground, with
+/// self-collision: collider contacts, and vertex–triangle and edge–edge contacts where it
+/// folds around the sphere.
+CollisionScene draped_cloth() {
+  CollisionScene scene;
+  const std::size_t n = 16;
+  io::ClothGrid grid = io::make_cloth_grid(n, n, Real(0.6) / Real(n - 1));
+  for (Vector3r& p : grid.positions) p = Vector3r(p.x() - Real(0.3), Real(0.25), p.y() - Real(0.3));
+  scene.model.particles =
+      ParticleState(grid.positions, std::vector<Real>(grid.vertex_count(), Real(1)));
+  scene.model.constraints.distance =
+      make_distance_constraints({grid.edge_indices, grid.positions, Real(1), Real(0)});
+  scene.model.constraints.dihedral = make_dihedral_constraints(
+      {grid.bending_indices, grid.positions, Real(1), Real(1e-3)});
+  scene.triangles.assign(grid.triangle_indices.begin(), grid.triangle_indices.end());
+  scene.collisions.colliders = {SphereCollider{Vector3r(0, Real(0.1), 0), Real(0.1)},
+                                PlaneCollider{Vector3r(0, 1, 0), 0}};
+  scene.collisions.thickness = Real(0.005);
+  scene.collisions.self_collision = true;
+  return scene;
+}
+
+/// A tetrahedral block dropped 1 cm onto another resting on the ground: particle–tet
+/// contacts between the solids, collider contacts under both.
+CollisionScene stacked_blocks() {
+  CollisionScene scene;
+  const io::TetrahedralBar block = io::make_tetrahedral_bar(3, 2, 3, Real(0.04));
+  std::vector<Vector3r> positions;
+  for (const Vector3r& rest : block.positions) positions.push_back(rest + Vector3r(0, Real(0.004), 0));
+  for (const Vector3r& rest : block.positions)
+    positions.push_back(rest + Vector3r(Real(0.02), Real(0.004 + 0.08 + 0.004 + 0.01), Real(0.02)));
+  scene.tetrahedra.assign(block.tetrahedron_indices.begin(), block.tetrahedron_indices.end());
+  for (const auto v : block.tetrahedron_indices)
+    scene.tetrahedra.push_back(std::uint32_t(block.positions.size()) + v);
+  scene.model = io::make_solid(positions, scene.tetrahedra, {});
+  scene.triangles = io::boundary_triangles(scene.tetrahedra);
+  scene.collisions.colliders = {PlaneCollider{Vector3r(0, 1, 0), 0}};
+  scene.collisions.thickness = Real(0.004);
+  scene.collisions.self_collision = true;
+  return scene;
+}
+
+/// Operator-new calls of ten steps after `settle` steps, and the contacts of the last.
+std::pair<std::size_t, std::size_t> allocations_of_settled_steps(const CollisionScene& scene,
+                                                                 const SolverSettings& settings,
+                                                                 int settle) {
+  Solver solver = test::make_solver(scene.model, settings);
+  solver.set_collisions(scene.collisions, scene.triangles, scene.tetrahedra);
+  for (int step = 0; step < settle; ++step) solver.step();
+  const std::size_t before = g_allocations.load();
+  for (int step = 0; step < 10; ++step) solver.step();
+  return {g_allocations.load() - before, solver.contacts().size()};
+}
+
+TEST(StepAllocations, ASettledStepWithCollisionsAllocatesNothing) {
+  const CollisionScene cloth = draped_cloth(), blocks = stacked_blocks();
+  struct Case {
+    SolverMode mode;
+    ContactScheduling scheduling;
+    std::size_t threads;
+  };
+  for (const Case c : {Case{SolverMode::gs, ContactScheduling::coloured, 1},
+                       Case{SolverMode::gs, ContactScheduling::coloured, 2},
+                       Case{SolverMode::gs, ContactScheduling::jacobi, 2},
+                       Case{SolverMode::hybrid, ContactScheduling::coloured, 2},
+                       Case{SolverMode::jacobi, ContactScheduling::jacobi, 2},
+                       Case{SolverMode::sequential, ContactScheduling::coloured, 1}}) {
+    SolverSettings settings = settings_of(c.mode, c.threads);
+    settings.substeps = 8;
+    settings.iterations = 2;
+    settings.contact_scheduling = c.scheduling;
+    const auto [cloth_allocations, cloth_contacts] =
+        allocations_of_settled_steps(cloth, settings, 60);
+    const auto [block_allocations, block_contacts] =
+        allocations_of_settled_steps(blocks, settings, 80);
+    const std::string name = std::string(solver_mode_name(c.mode)) + ", " +
+                             (c.scheduling == ContactScheduling::coloured ? "coloured" : "jacobi") +
+                             " contacts, " + std::to_string(c.threads) + " threads";
+    EXPECT_GT(cloth_contacts, 0u) << name;
+    EXPECT_GT(block_contacts, 0u) << name;
+    EXPECT_EQ(cloth_allocations, 0u) << "cloth, " << name;
+    EXPECT_EQ(block_allocations, 0u) << "blocks, " << name;
   }
 }
 

@@ -140,8 +140,9 @@ class CollisionStage {
 
   /// The contacts of `state` (positions predicted, previous = start of the substep) for a
   /// substep of length h under gravity of magnitude `gravity`: replaces `contacts` with
-  /// collider contacts and self-contacts (λ = 0). Runs its parallel loops in the calling
-  /// task arena.
+  /// collider contacts and self-contacts (λ = 0), reusing its arrays (pass the same set each
+  /// substep and, once the contacts stop growing, detection allocates nothing). Runs its
+  /// parallel loops in the calling task arena.
   void detect(const ParticleState& state, Real h, Real gravity, ConstraintSets& contacts);
 
   const CollisionSettings& settings() const { return settings_; }

@@ -331,5 +331,11 @@ struct SelfCollisionConstraints {
 SelfCollisionConstraints make_self_collision_constraints(const SelfCollision::Contacts& contacts,
                                                          std::size_t particle_count,
                                                          const SelfCollisionSettings& settings);
+/// The same into two batches (every field replaced, the arrays' capacity kept).
+void make_self_collision_constraints(const SelfCollision::Contacts& contacts,
+                                     std::size_t particle_count,
+                                     const SelfCollisionSettings& settings,
+                                     TrianglePointDistanceConstraints& triangle_point,
+                                     EdgeEdgeDistanceConstraints& edge_edge);
 
 }  // namespace tessera

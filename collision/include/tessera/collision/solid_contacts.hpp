@@ -92,10 +92,18 @@ class SolidSurface {
 /// made at `state`, whose positions are the predicted ones); the rest stay in
 /// `remaining_triangle_point` (four particles each, in their order). A pair whose tetrahedron
 /// is degenerate (no finite barycentric coordinates) stays a distance contact too.
+/// `scratch`, if given, holds the working lists between calls (the collision stage keeps one,
+/// so a substep allocates nothing once the contacts stop growing); `particle_tet` keeps its
+/// arrays' capacity too.
+struct SolidContactScratch {
+  std::vector<ParticleIndex> particles;
+  std::vector<Vector3r> barycentric, normals;
+};
 void split_solid_contacts(const SolidSurface& surface, const SelfCollision::Contacts& contacts,
                           const ParticleState& state, Real thickness, Real friction,
                           std::vector<ParticleIndex>& remaining_triangle_point,
-                          ParticleTetContacts& particle_tet);
+                          ParticleTetContacts& particle_tet,
+                          SolidContactScratch* scratch = nullptr);
 
 /// Removes from `edge_edge` (four particles per pair) the pairs whose four particles are all
 /// corners of tetrahedra, keeping the order of the rest.

@@ -12,6 +12,7 @@
 #include <span>
 #include <tuple>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <tessera/core/constraint_families.hpp>
@@ -45,13 +46,14 @@ void gather_arrays(Out out, In in, std::span<const std::uint32_t> source,
       out);
 }
 
-/// The batch whose slot j holds constraint source[j] of `in` (an empty one for `padding`),
-/// particles renamed by map_particle(slot k or 0, j or entry, old particle).
+/// Makes `out` the batch whose slot j holds constraint source[j] of `in` (an empty one for
+/// `padding`), particles renamed by map_particle(slot k or 0, j or entry, old particle).
+/// Every field of `out` is overwritten, and its arrays keep their capacity: a caller that
+/// reorders into the same batch each substep allocates only when a batch outgrows the last.
 template <class Batch, class MapParticle>
-Batch reorder_batch(const Batch& in, std::span<const std::uint32_t> source,
-                    std::uint32_t padding, std::size_t particle_count,
-                    MapParticle&& map_particle) {
-  Batch out;
+void reorder_batch_into(Batch& out, const Batch& in, std::span<const std::uint32_t> source,
+                        std::uint32_t padding, std::size_t particle_count,
+                        MapParticle&& map_particle) {
   const std::size_t n = source.size();
   gather_arrays(Batch::per_constraint_arrays(out), Batch::per_constraint_arrays(in), source,
                 padding);
@@ -87,6 +89,16 @@ Batch reorder_batch(const Batch& in, std::span<const std::uint32_t> source,
     for (std::size_t e = 0; e < entry_source.size(); ++e)
       out.particle[e] = map_particle(std::size_t(0), e, in.particle[entry_source[e]]);
   }
+}
+
+/// The batch reorder_batch_into makes, new.
+template <class Batch, class MapParticle>
+Batch reorder_batch(const Batch& in, std::span<const std::uint32_t> source,
+                    std::uint32_t padding, std::size_t particle_count,
+                    MapParticle&& map_particle) {
+  Batch out;
+  reorder_batch_into(out, in, source, padding, particle_count,
+                     std::forward<MapParticle>(map_particle));
   return out;
 }
 

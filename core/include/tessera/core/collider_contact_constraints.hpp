@@ -82,6 +82,9 @@ struct ColliderContacts {
 /// contacts, a friction coefficient that is negative or not finite, and a restitution outside
 /// [0, 1]. A particle may have several contacts (one per collider it touches).
 ColliderContacts make_collider_contacts(const ColliderContactInput& input);
+/// The same into `out`: every field replaced, its arrays keep their capacity (the collision
+/// stage's per-substep contacts). On InvalidInput `out` is left valid, contents unspecified.
+void make_collider_contacts(const ColliderContactInput& input, ColliderContacts& out);
 
 /// Position solve of contacts [begin, end) once (accumulating λ), W at a time on the active
 /// SIMD target, writing the corrected positions of movable particles (the range rules of

@@ -71,6 +71,10 @@ struct ParticleTetContacts {
 /// (effective mass 0) and does nothing.
 ParticleTetContacts make_particle_tet_contacts(const ParticleTetContactInput& input,
                                                const ParticleState& state);
+/// The same into `out`: every field replaced, its arrays keep their capacity (the collision
+/// stage's per-substep contacts). On InvalidInput `out` is left valid, contents unspecified.
+void make_particle_tet_contacts(const ParticleTetContactInput& input, const ParticleState& state,
+                                ParticleTetContacts& out);
 
 /// Position solve of contacts [begin, end) once (accumulating λ), W at a time on the active
 /// SIMD target, writing the corrected positions of movable particles. The contacts of the

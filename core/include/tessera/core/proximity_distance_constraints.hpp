@@ -93,6 +93,15 @@ TrianglePointDistanceConstraints make_triangle_point_distance_constraints(
     const ProximityDistanceConstraintInput& input);
 EdgeEdgeDistanceConstraints make_edge_edge_distance_constraints(
     const ProximityDistanceConstraintInput& input);
+/// The same into `out`: every field replaced, its arrays keep their capacity (the collision
+/// stage rebuilds its contacts into the same batches every substep and allocates nothing
+/// once they stop growing). On InvalidInput `out` is left valid, its contents unspecified.
+void make_edge_point_distance_constraints(const ProximityDistanceConstraintInput& input,
+                                          EdgePointDistanceConstraints& out);
+void make_triangle_point_distance_constraints(const ProximityDistanceConstraintInput& input,
+                                              TrianglePointDistanceConstraints& out);
+void make_edge_edge_distance_constraints(const ProximityDistanceConstraintInput& input,
+                                         EdgeEdgeDistanceConstraints& out);
 
 /// Project constraints [begin, end) once, W at a time on the active SIMD target, writing the
 /// corrected positions of movable particles. The constraints of the range must share no

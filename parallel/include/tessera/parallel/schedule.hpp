@@ -78,6 +78,7 @@ struct ScheduleBlock {
   ConstraintFamily family;
   std::uint32_t begin;
   std::uint32_t end;
+  friend bool operator==(const ScheduleBlock&, const ScheduleBlock&) = default;
 };
 
 /// Where one constraint of a family went: the entry of the family's old→new table.

@@ -59,6 +59,7 @@ namespace detail {
 struct ColouredContacts;
 class PhaseRegion;
 struct ResidualScratch;
+struct JacobiSetScratch;
 }
 
 /// Jacobi over-relaxation ω when nothing else is said (see the README for the measurement).
@@ -353,9 +354,10 @@ class Solver {
   /// A set swept after the schedule's (dynamic constraints, contacts): a Jacobi set built
   /// from `constraints`, whose particles renumber() maps to the schedule's numbering (mode
   /// sequential: the blocks only, in input order). source gets the caller's index per slot.
-  JacobiSet extra_set(const ConstraintSets& constraints,
-                      std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>& source,
-                      bool scheduled_numbering);
+  /// Built into `set`, whose arrays keep their capacity (contacts: every substep).
+  void extra_set(const ConstraintSets& constraints,
+                 std::array<std::vector<std::uint32_t>, kConstraintFamilyCount>& source,
+                 bool scheduled_numbering, JacobiSet& set);
   void update_velocities(Real h);
   /// update_velocities(h) then integrate(h) in one pass over the particles (the same
   /// arithmetic per particle, so the same bits): between two substeps with no velocity pass.
@@ -448,6 +450,10 @@ class Solver {
   ConstraintSets contacts_found_;
   JacobiSet contacts_;
   std::unique_ptr<detail::ColouredContacts> contact_colours_;
+  /// The contacts that found no colour, before they become the Jacobi set contacts_.
+  ConstraintSets contact_overflow_;
+  /// extra_set's working lists (the contacts' Jacobi set is rebuilt every substep).
+  std::unique_ptr<detail::JacobiSetScratch> jacobi_scratch_;
   /// ContactScheduling::coloured: scratch (zero between substeps) for the substep's contact
   /// colours, a word per particle.
   std::vector<std::uint64_t> contact_masks_;

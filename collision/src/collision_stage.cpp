@@ -91,7 +91,7 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
     }
   };
   contacts.for_each([&](ConstraintFamily family, auto& batch) {
-    if (!rebuilt(family) && batch.size() != 0) batch = {};
+    if (!rebuilt(family)) batch = {};
   });
   // A contact reaches one thickness beyond the contact distance, so a particle the
   // iterations push towards a collider (or a layer) still finds the contact made for it.

@@ -113,7 +113,9 @@ Vector3r vec3_of(const std::array<AlignedVector<Real>, 3>& arrays, std::size_t c
 
 }  // namespace
 
-void make_collider_contacts(const ColliderContactInput& input, ColliderContacts& result) {
+namespace {
+
+void build_collider_contacts(const ColliderContactInput& input, ColliderContacts& result) {
   const detail::ConstraintValidator validator(ColliderContacts::kFamily, input.particle_count);
   validator.check_parameter("static friction", input.static_friction);
   validator.check_parameter("dynamic friction", input.dynamic_friction);
@@ -149,6 +151,18 @@ void make_collider_contacts(const ColliderContactInput& input, ColliderContacts&
   detail::fill(result.dynamic_friction, n, input.dynamic_friction);
   detail::fill(result.restitution, n, input.restitution);
   detail::fill(result.lambda, n, 0);
+}
+
+}  // namespace
+
+void make_collider_contacts(const ColliderContactInput& input, ColliderContacts& out) {
+  // A rejected input leaves `out` empty, never a count its arrays do not match.
+  try {
+    build_collider_contacts(input, out);
+  } catch (...) {
+    out = {};
+    throw;
+  }
 }
 
 ColliderContacts make_collider_contacts(const ColliderContactInput& input) {

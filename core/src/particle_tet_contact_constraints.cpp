@@ -180,8 +180,10 @@ bool is_unit(const Vector3r& n) {
 
 }  // namespace
 
-void make_particle_tet_contacts(const ParticleTetContactInput& input, const ParticleState& state,
-                                ParticleTetContacts& result) {
+namespace {
+
+void build_particle_tet_contacts(const ParticleTetContactInput& input, const ParticleState& state,
+                                 ParticleTetContacts& result) {
   const detail::ConstraintValidator validator(ParticleTetContacts::kFamily, state.size());
   validator.check_parameter("friction", input.friction);
   validator.fill_particles(result.particles, input.particles);
@@ -219,6 +221,19 @@ void make_particle_tet_contacts(const ParticleTetContactInput& input, const Part
   if (n > 0) {
     ParticleState& velocities = const_cast<ParticleState&>(state);  // only read by init
     HWY_DYNAMIC_DISPATCH(InitParticleTetContacts)(velocity_arrays_of(velocities), result);
+  }
+}
+
+}  // namespace
+
+void make_particle_tet_contacts(const ParticleTetContactInput& input, const ParticleState& state,
+                                ParticleTetContacts& out) {
+  // A rejected input leaves `out` empty, never a count its arrays do not match.
+  try {
+    build_particle_tet_contacts(input, state, out);
+  } catch (...) {
+    out = {};
+    throw;
   }
 }
 

@@ -152,6 +152,19 @@ void make_proximity_constraints(const ProximityDistanceConstraintInput& input,
   detail::fill(result.stretch_stiffness, n, input.stretch_stiffness);
 }
 
+/// make_proximity_constraints into a kept batch: a rejected input leaves `out` empty, never a
+/// count its arrays do not match.
+template <class Constraints>
+void make_proximity_constraints_into(const ProximityDistanceConstraintInput& input,
+                                     Constraints& out) {
+  try {
+    make_proximity_constraints(input, out);
+  } catch (...) {
+    out = {};
+    throw;
+  }
+}
+
 /// The checks every proximity entry point makes before dispatching: the range and particle
 /// count, and stiffness semantics (the seed has no XPBD form of these families).
 template <class Constraints>
@@ -176,7 +189,7 @@ HWY_EXPORT(EdgeEdgeDistanceResiduals);
 
 void make_edge_point_distance_constraints(const ProximityDistanceConstraintInput& input,
                                   EdgePointDistanceConstraints& out) {
-  make_proximity_constraints(input, out);
+  make_proximity_constraints_into(input, out);
 }
 
 EdgePointDistanceConstraints make_edge_point_distance_constraints(
@@ -188,7 +201,7 @@ EdgePointDistanceConstraints make_edge_point_distance_constraints(
 
 void make_triangle_point_distance_constraints(const ProximityDistanceConstraintInput& input,
                                   TrianglePointDistanceConstraints& out) {
-  make_proximity_constraints(input, out);
+  make_proximity_constraints_into(input, out);
 }
 
 TrianglePointDistanceConstraints make_triangle_point_distance_constraints(
@@ -200,7 +213,7 @@ TrianglePointDistanceConstraints make_triangle_point_distance_constraints(
 
 void make_edge_edge_distance_constraints(const ProximityDistanceConstraintInput& input,
                                   EdgeEdgeDistanceConstraints& out) {
-  make_proximity_constraints(input, out);
+  make_proximity_constraints_into(input, out);
 }
 
 EdgeEdgeDistanceConstraints make_edge_edge_distance_constraints(

@@ -108,10 +108,8 @@ void fill_set(JacobiSet& jacobi, const ConstraintSets& sets, const SourceLists& 
   });
 }
 
-/// Each movable particle's incidences, ascending (a counting sort by particle); returns the
-/// count per particle (count[p + 1] for particle p).
-/// Fills `count` (particle p's counted incidences at p + 1) and the set's particle lists;
-/// `start` is scratch.
+/// Each movable particle's incidences, ascending (a counting sort by particle); `count` gets
+/// the count per particle (count[p + 1] for particle p); `start` is scratch.
 void index_particles(JacobiSet& jacobi, std::size_t particle_count, const Movable& movable,
                      const std::vector<std::uint8_t>& real_incidence,
                      std::vector<std::uint32_t>& count, std::vector<std::uint32_t>& start) {

@@ -158,6 +158,25 @@ TEST(ContactColouring, AStaticParticleSeparatesNothingAndTheSixtyFifthContactOve
   for (const ScheduleBlock& block : first) in_colour_0 += block.end - block.begin;
   EXPECT_EQ(in_colour_0, 80u) << "a static particle separates nothing";
   for (const std::uint64_t word : scratch) EXPECT_EQ(word, 0u);
+  // Coloured next into the same result, contacts without overflow leave none of this
+  // substep's overflow or colours behind.
+  ConstraintSets fewer;
+  fewer.distance = contacts_between({0, 1, 55, 2, 55, 3}, cloth.positions);
+  detail::ColouredContacts reused = coloured;
+  detail::colour_contacts(fewer, scratch, cloth.inverse_mass, reused);
+  const auto fresh = colour(fewer, scratch, cloth.inverse_mass);
+  EXPECT_EQ(reused.overflow, fresh.overflow);
+  EXPECT_TRUE(reused.overflow[std::size_t(ConstraintFamily::distance)].empty());
+  EXPECT_EQ(reused.colour_offsets, fresh.colour_offsets);
+  EXPECT_EQ(reused.blocks, fresh.blocks);
+  EXPECT_EQ(reused.source, fresh.source);
+  EXPECT_EQ(reused.constraints.distance.particles.particle,
+            fresh.constraints.distance.particles.particle);
+  EXPECT_EQ(reused.constraints.distance.rest_length, fresh.constraints.distance.rest_length);
+  EXPECT_EQ(reused.constraints.distance.stiffness, fresh.constraints.distance.stiffness);
+  EXPECT_EQ(reused.constraints.distance.compliance, fresh.constraints.distance.compliance);
+  EXPECT_EQ(reused.constraints.distance.lambda, fresh.constraints.distance.lambda);
+  expect_valid(reused, fewer, cloth.inverse_mass);
 }
 
 }  // namespace

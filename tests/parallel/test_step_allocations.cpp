@@ -5,12 +5,14 @@
 // sized, the phase region made), further steps must not call it, in every mode, on 1 and 2
 // threads, with residual reports and the finite and divergence checks on. With a collision
 // stage the contacts are remade every substep into the same buffers: once a scene has
-// settled (its contact counts no longer reach new highs), its steps allocate nothing either,
-// for cloth on colliders and against itself and for solids on solids, with either contact
-// scheduling.
+// settled (its contact counts no longer reach new highs), its steps allocate nothing either
+// (ten steps in a row), for cloth on colliders and against itself and for solids on solids,
+// with either contact scheduling; before, a substep allocated some 500 times.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <new>
 
@@ -146,23 +148,33 @@ struct CollisionScene {
   CollisionSettings collisions;
 };
 
-/// A free 16 × 16 cloth 0.6 m wide dropped 5 cm onto a sphere and the ground, with
-/// self-collision: collider contacts, and vertex–triangle and edge–edge contacts where it
-/// folds around the sphere.
-CollisionScene draped_cloth() {
+/// Two 12 × 12 sheets 0.3 m wide, one on the ground and one 2 cm above it, shifted by half
+/// a cell, with self-collision and a sphere under a corner: collider contacts, and the upper
+/// sheet's vertex–triangle and edge–edge contacts with the lower once it has landed on it.
+CollisionScene stacked_sheets() {
   CollisionScene scene;
-  const std::size_t n = 16;
-  io::ClothGrid grid = io::make_cloth_grid(n, n, Real(0.6) / Real(n - 1));
-  for (Vector3r& p : grid.positions) p = Vector3r(p.x() - Real(0.3), Real(0.25), p.y() - Real(0.3));
+  const std::size_t n = 12;
+  const Real h = Real(0.3) / Real(n - 1);
+  const io::ClothGrid grid = io::make_cloth_grid(n, n, h);
+  std::vector<Vector3r> positions;
+  std::vector<ParticleIndex> edges, bending;
+  for (int layer = 0; layer < 2; ++layer) {
+    const std::uint32_t first = std::uint32_t(positions.size());
+    for (const Vector3r& p : grid.positions)
+      positions.push_back(layer == 0 ? Vector3r(p.x(), Real(0.005), p.y())
+                                     : Vector3r(p.x() + h / 2, Real(0.025), p.y() + h / 2));
+    for (const auto v : grid.triangle_indices) scene.triangles.push_back(first + v);
+    for (const auto v : grid.edge_indices) edges.push_back(first + v);
+    for (const auto v : grid.bending_indices) bending.push_back(first + v);
+  }
   scene.model.particles =
-      ParticleState(grid.positions, std::vector<Real>(grid.vertex_count(), Real(1)));
+      ParticleState(positions, std::vector<Real>(positions.size(), Real(1)));
   scene.model.constraints.distance =
-      make_distance_constraints({grid.edge_indices, grid.positions, Real(1), Real(0)});
-  scene.model.constraints.dihedral = make_dihedral_constraints(
-      {grid.bending_indices, grid.positions, Real(1), Real(1e-3)});
-  scene.triangles.assign(grid.triangle_indices.begin(), grid.triangle_indices.end());
-  scene.collisions.colliders = {SphereCollider{Vector3r(0, Real(0.1), 0), Real(0.1)},
-                                PlaneCollider{Vector3r(0, 1, 0), 0}};
+      make_distance_constraints({edges, positions, Real(1), Real(0)});
+  scene.model.constraints.dihedral =
+      make_dihedral_constraints({bending, positions, Real(1), Real(1e-3)});
+  scene.collisions.colliders = {PlaneCollider{Vector3r(0, 1, 0), 0},
+                                SphereCollider{Vector3r(0, 0, 0), Real(0.05)}};
   scene.collisions.thickness = Real(0.005);
   scene.collisions.self_collision = true;
   return scene;
@@ -188,20 +200,31 @@ CollisionScene stacked_blocks() {
   return scene;
 }
 
-/// Operator-new calls of ten steps after `settle` steps, and the contacts of the last.
-std::pair<std::size_t, std::size_t> allocations_of_settled_steps(const CollisionScene& scene,
-                                                                 const SolverSettings& settings,
-                                                                 int settle) {
+/// Steps until ten steps in a row have called operator new zero times (at most
+/// `most_steps`; 0 if that never happens), and the contacts of the last step. A step with
+/// collisions allocates while a contact count still reaches new highs (the buffers grow to
+/// it), so the window is looked for rather than placed at a fixed step: where a scene settles
+/// differs a little between SIMD targets, precisions and builds.
+std::pair<int, std::array<std::size_t, kConstraintFamilyCount>> steps_until_ten_without_allocation(const CollisionScene& scene,
+                                                               const SolverSettings& settings,
+                                                               int most_steps) {
   Solver solver = test::make_solver(scene.model, settings);
   solver.set_collisions(scene.collisions, scene.triangles, scene.tetrahedra);
-  for (int step = 0; step < settle; ++step) solver.step();
-  const std::size_t before = g_allocations.load();
-  for (int step = 0; step < 10; ++step) solver.step();
-  return {g_allocations.load() - before, solver.contacts().size()};
+  int quiet = 0;
+  for (int step = 1; step <= most_steps; ++step) {
+    const std::size_t before = g_allocations.load();
+    solver.step();
+    quiet = g_allocations.load() == before ? quiet + 1 : 0;
+    if (quiet == 10) return {step, solver.contacts().sizes()};
+  }
+  return {0, solver.contacts().sizes()};
 }
 
 TEST(StepAllocations, ASettledStepWithCollisionsAllocatesNothing) {
-  const CollisionScene cloth = draped_cloth(), blocks = stacked_blocks();
+  const CollisionScene cloth = stacked_sheets(), blocks = stacked_blocks();
+  // Mode jacobi and sequential, and gs with ContactScheduling::jacobi, rebuild the contacts'
+  // Jacobi set every substep; gs and hybrid colour them. Mode jacobi sweeps the cloth only:
+  // with 2 Jacobi iterations per substep the upper block does not stay on the lower.
   struct Case {
     SolverMode mode;
     ContactScheduling scheduling;
@@ -212,22 +235,39 @@ TEST(StepAllocations, ASettledStepWithCollisionsAllocatesNothing) {
                        Case{SolverMode::gs, ContactScheduling::jacobi, 2},
                        Case{SolverMode::hybrid, ContactScheduling::coloured, 2},
                        Case{SolverMode::jacobi, ContactScheduling::jacobi, 2},
-                       Case{SolverMode::sequential, ContactScheduling::coloured, 1}}) {
+                       Case{SolverMode::sequential, ContactScheduling::jacobi, 1}}) {
     SolverSettings settings = settings_of(c.mode, c.threads);
     settings.substeps = 8;
     settings.iterations = 2;
     settings.contact_scheduling = c.scheduling;
-    const auto [cloth_allocations, cloth_contacts] =
-        allocations_of_settled_steps(cloth, settings, 60);
-    const auto [block_allocations, block_contacts] =
-        allocations_of_settled_steps(blocks, settings, 80);
+    const bool with_blocks = c.mode != SolverMode::jacobi;
+    const auto [cloth_quiet, cloth_contacts] =
+        steps_until_ten_without_allocation(cloth, settings, 150);
+    const auto [block_quiet, block_contacts] =
+        with_blocks ? steps_until_ten_without_allocation(blocks, settings, 150)
+                    : std::pair{1, std::array<std::size_t, kConstraintFamilyCount>{}};
     const std::string name = std::string(solver_mode_name(c.mode)) + ", " +
                              (c.scheduling == ContactScheduling::coloured ? "coloured" : "jacobi") +
-                             " contacts, " + std::to_string(c.threads) + " threads";
-    EXPECT_GT(cloth_contacts, 0u) << name;
-    EXPECT_GT(block_contacts, 0u) << name;
-    EXPECT_EQ(cloth_allocations, 0u) << "cloth, " << name;
-    EXPECT_EQ(block_allocations, 0u) << "blocks, " << name;
+                             " contact scheduling, " + std::to_string(c.threads) + " threads";
+    // Measured (Zen 3, release): the quiet steps start by step 65 (sheets) and 20 (blocks);
+    // 150 leaves room.
+    EXPECT_GT(cloth_quiet, 0) << "cloth, " << name;
+    EXPECT_GT(block_quiet, 0) << "blocks, " << name;
+    std::printf("%s: quiet from step %d (sheets), %d (blocks)\n", name.c_str(),
+                cloth_quiet - 9, with_blocks ? block_quiet - 9 : 0);
+
+    // With every kind of contact in place (not a scene that went quiet by losing them).
+    const auto of = [](const auto& sizes, ConstraintFamily family) {
+      return sizes[std::size_t(family)];
+    };
+    EXPECT_GT(of(cloth_contacts, ConstraintFamily::collider_contact), 0u) << name;
+    EXPECT_GT(of(cloth_contacts, ConstraintFamily::triangle_point_distance) +
+                  of(cloth_contacts, ConstraintFamily::edge_edge_distance),
+              0u)
+        << name;
+    if (!with_blocks) continue;
+    EXPECT_GT(of(block_contacts, ConstraintFamily::collider_contact), 0u) << name;
+    EXPECT_GT(of(block_contacts, ConstraintFamily::particle_tet_contact), 0u) << name;
   }
 }
 

@@ -87,6 +87,12 @@ class SolidSurface {
   std::size_t solid_faces_ = 0;
 };
 
+/// split_solid_contacts' working lists, kept between calls.
+struct SolidContactScratch {
+  std::vector<ParticleIndex> particles;
+  std::vector<Vector3r> barycentric, normals;
+};
+
 /// A detection's vertex–triangle pairs, split: those on a solid face whose tetrahedron does
 /// not hold the vertex become particle–tet contacts (see the top of this file; friction μ,
 /// made at `state`, whose positions are the predicted ones); the rest stay in
@@ -95,10 +101,6 @@ class SolidSurface {
 /// `scratch`, if given, holds the working lists between calls (the collision stage keeps one,
 /// so a substep allocates nothing once the contacts stop growing); `particle_tet` keeps its
 /// arrays' capacity too.
-struct SolidContactScratch {
-  std::vector<ParticleIndex> particles;
-  std::vector<Vector3r> barycentric, normals;
-};
 void split_solid_contacts(const SolidSurface& surface, const SelfCollision::Contacts& contacts,
                           const ParticleState& state, Real thickness, Real friction,
                           std::vector<ParticleIndex>& remaining_triangle_point,

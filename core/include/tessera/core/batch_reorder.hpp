@@ -49,7 +49,8 @@ void gather_arrays(Out out, In in, std::span<const std::uint32_t> source,
 /// Makes `out` the batch whose slot j holds constraint source[j] of `in` (an empty one for
 /// `padding`), particles renamed by map_particle(slot k or 0, j or entry, old particle).
 /// Every field of `out` is overwritten, and its arrays keep their capacity: a caller that
-/// reorders into the same batch each substep allocates only when a batch outgrows the last.
+/// reorders fixed-arity batches into the same batch each substep allocates only when a batch
+/// outgrows the last (the CSR layout still builds a list of entries). `out` is not `in`.
 template <class Batch, class MapParticle>
 void reorder_batch_into(Batch& out, const Batch& in, std::span<const std::uint32_t> source,
                         std::uint32_t padding, std::size_t particle_count,

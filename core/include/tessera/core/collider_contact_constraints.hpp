@@ -83,7 +83,8 @@ struct ColliderContacts {
 /// [0, 1]. A particle may have several contacts (one per collider it touches).
 ColliderContacts make_collider_contacts(const ColliderContactInput& input);
 /// The same into `out`: every field replaced, its arrays keep their capacity (the collision
-/// stage's per-substep contacts). On InvalidInput `out` is left valid, contents unspecified.
+/// stage's per-substep contacts). On InvalidInput `out` is left empty. The input's spans must
+/// not point into `out`.
 void make_collider_contacts(const ColliderContactInput& input, ColliderContacts& out);
 
 /// Position solve of contacts [begin, end) once (accumulating λ), W at a time on the active

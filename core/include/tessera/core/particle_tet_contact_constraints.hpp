@@ -72,7 +72,8 @@ struct ParticleTetContacts {
 ParticleTetContacts make_particle_tet_contacts(const ParticleTetContactInput& input,
                                                const ParticleState& state);
 /// The same into `out`: every field replaced, its arrays keep their capacity (the collision
-/// stage's per-substep contacts). On InvalidInput `out` is left valid, contents unspecified.
+/// stage's per-substep contacts). On InvalidInput `out` is left empty. The input's spans must
+/// not point into `out`.
 void make_particle_tet_contacts(const ParticleTetContactInput& input, const ParticleState& state,
                                 ParticleTetContacts& out);
 

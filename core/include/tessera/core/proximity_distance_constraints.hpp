@@ -95,7 +95,8 @@ EdgeEdgeDistanceConstraints make_edge_edge_distance_constraints(
     const ProximityDistanceConstraintInput& input);
 /// The same into `out`: every field replaced, its arrays keep their capacity (the collision
 /// stage rebuilds its contacts into the same batches every substep and allocates nothing
-/// once they stop growing). On InvalidInput `out` is left valid, its contents unspecified.
+/// once they stop growing). On InvalidInput `out` is left empty. The input's spans must not
+/// point into `out`.
 void make_edge_point_distance_constraints(const ProximityDistanceConstraintInput& input,
                                           EdgePointDistanceConstraints& out);
 void make_triangle_point_distance_constraints(const ProximityDistanceConstraintInput& input,

@@ -134,7 +134,10 @@ void split_solid_contacts(const SolidSurface& surface, const SelfCollision::Cont
                           ParticleTetContacts& particle_tet, SolidContactScratch* scratch) {
   remaining_triangle_point.clear();
   SolidContactScratch local;
-  auto& [particles, barycentric, normals] = scratch ? *scratch : local;
+  SolidContactScratch& lists = scratch ? *scratch : local;
+  auto& particles = lists.particles;
+  auto& barycentric = lists.barycentric;
+  auto& normals = lists.normals;
   particles.clear(), barycentric.clear(), normals.clear();
   const bool has_start = state.previous_x.size() == state.size();
   const auto start = [&](std::uint32_t i) {

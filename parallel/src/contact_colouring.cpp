@@ -33,7 +33,11 @@ void colour_contacts(const ConstraintSets& found, std::span<std::uint64_t> conta
     result.overflow[f].clear();
   }
   result.constraint_count = 0;
-  auto& [colour_of, by_colour_offsets, by_colour, next] = result.scratch;
+  // References, not a structured binding: clang 14 cannot capture a binding in a lambda.
+  auto& colour_of = result.scratch.colour_of;
+  auto& by_colour_offsets = result.scratch.by_colour_offsets;
+  auto& by_colour = result.scratch.by_colour;
+  auto& next = result.scratch.next;
   // 1. Each contact's colour, first-fit in the stage's order (kContactColours: overflow).
   std::size_t colours = 0;
   found.for_each([&](ConstraintFamily family, const auto& batch) {

@@ -262,8 +262,14 @@ int run_command(const RunOptions& options) {
     summary.add("contacts_max", found.contacts_max);
     summary.add("seconds_collision", found.seconds_detection);
     if (stage->settings().self_collision)
-      summary.add("self_collision_detections", found.self_detections),
-          summary.add("self_collision_reboxes", found.self_reboxes);
+    {
+      summary.add("self_collision_detections", found.self_detections);
+      summary.add("self_collision_reboxes", found.self_reboxes);
+      // seconds_collision's self-collision part, by what each substep did.
+      summary.add("seconds_self_collision_built", found.seconds_self_built);
+      summary.add("seconds_self_collision_reboxed", found.seconds_self_reboxed);
+      summary.add("seconds_self_collision_refined", found.seconds_self_refined);
+    }
     // What ran: modes jacobi and sequential keep their own way whatever the setting says.
     const SolverMode mode = solver.settings().mode;
     const bool coloured = solver.settings().contact_scheduling == ContactScheduling::coloured &&

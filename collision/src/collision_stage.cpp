@@ -139,22 +139,29 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
     // filtered at this substep's positions, the primitives of a particle that moved beyond
     // its room re-boxed first (self_collision.hpp): the same contacts as a build every
     // substep.
-    if (statistics_.substeps == 0 || buffers.substeps_since_detection + 1 >= interval) {
+    const auto self_start = std::chrono::steady_clock::now();
+    SelfCollision::Update done = SelfCollision::Update::built;
+    if (statistics_.substeps == 0 || buffers.substeps_since_detection + 1 >= interval)
       buffers.self->detect(state, self, buffers.self_contacts);
-      buffers.substeps_since_detection = 0;
-      ++statistics_.self_detections;
-    } else {
-      switch (buffers.self->update(state, self, buffers.self_contacts)) {
-        case SelfCollision::Update::built:
-          buffers.substeps_since_detection = 0;
-          ++statistics_.self_detections;
-          break;
-        case SelfCollision::Update::reboxed:
-          ++statistics_.self_reboxes;
-          ++buffers.substeps_since_detection;
-          break;
-        case SelfCollision::Update::refined: ++buffers.substeps_since_detection; break;
-      }
+    else
+      done = buffers.self->update(state, self, buffers.self_contacts);
+    const double self_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - self_start).count();
+    switch (done) {
+      case SelfCollision::Update::built:
+        buffers.substeps_since_detection = 0;
+        ++statistics_.self_detections;
+        statistics_.seconds_self_built += self_seconds;
+        break;
+      case SelfCollision::Update::reboxed:
+        ++statistics_.self_reboxes;
+        ++buffers.substeps_since_detection;
+        statistics_.seconds_self_reboxed += self_seconds;
+        break;
+      case SelfCollision::Update::refined:
+        ++buffers.substeps_since_detection;
+        statistics_.seconds_self_refined += self_seconds;
+        break;
     }
     if (buffers.solids) {
       // Vertex–face pairs of solids become particle–tet contacts; the rest stay distances.

@@ -164,6 +164,9 @@ void bind_collisions(py::module_& m, py::class_<Solver>& solver) {
             d["seconds_detection"] = c.seconds_detection;
             d["self_collision_detections"] = c.self_detections;
             d["self_collision_reboxes"] = c.self_reboxes;
+            d["seconds_self_collision_built"] = c.seconds_self_built;
+            d["seconds_self_collision_reboxed"] = c.seconds_self_reboxed;
+            d["seconds_self_collision_refined"] = c.seconds_self_refined;
             d["seconds_contact_scheduling"] = st.seconds_contact_scheduling;
             d["contact_colours_max"] = st.contact_colours_max;
             d["contacts_overflowed"] = st.contacts_overflowed;

@@ -23,6 +23,9 @@ def test_a_scene_with_contacts_solves_bitwise_as_the_tool(tool, spec):
     found = solver.collision_statistics
     assert found["contacts_max"] == expected["contacts_max"]
     assert found["contacts_mean"] == pytest.approx(expected["contacts_mean"])
+    assert found["seconds_self_collision_built"] > 0  # the first substep builds
+    assert (found["seconds_self_collision_built"] + found["seconds_self_collision_reboxed"] +
+            found["seconds_self_collision_refined"]) <= found["seconds_detection"]
     positions = solver.positions
     assert tessera.penetration_depth(positions, settings["colliders"],
                                      settings.get("tetrahedra")) == pytest.approx(

@@ -264,6 +264,15 @@ TEST_F(Cli, DrapeEndsOnTheSphereWithoutPenetrationOrSelfIntersection) {
   EXPECT_GT(a["contacts_max"].get<double>(), 8) << "the cloth lies on the sphere";
   EXPECT_LE(a["penetration_max"].get<double>(), 0.005) << "at most the thickness deep";
   EXPECT_EQ(a["self_intersections"], 0);
+  // Self-collision's time by what each substep did: the first substep builds, and the parts
+  // add up to no more than the whole.
+  const double built = a["seconds_self_collision_built"].get<double>(),
+               reboxed = a["seconds_self_collision_reboxed"].get<double>(),
+               refined = a["seconds_self_collision_refined"].get<double>();
+  EXPECT_GT(built, 0);
+  EXPECT_GE(reboxed, 0);
+  EXPECT_GT(refined, 0) << "most substeps filter the last build's candidates";
+  EXPECT_LE(built + reboxed + refined, a["seconds_collision"].get<double>());
   // Without colliders nothing collides and nothing is reported.
   EXPECT_FALSE(run_json({"run", "cloth:8", "--frames", "1"}).contains("contacts_mean"));
 }

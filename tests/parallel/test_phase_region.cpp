@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <thread>
 #include <vector>
 
@@ -63,6 +64,45 @@ TEST(PhaseRegion, AResetRegionRunsLikeANewOne) {
 TEST(PhaseRegion, SharesWithoutAThreadAreTakenOver) {
   check_region(7, 3, 1);  // one thread does all three shares of every phase
   check_region(5, 8, 3);
+}
+
+TEST(PhaseRegion, AThreadLeftAloneStopsWaitingForTheAbsentOnes) {
+  // Two shares and one thread (TBB gave the region no worker: an affinity mask of one core,
+  // or more threads asked for than the machine has). The thread waits once, in the first
+  // region's first phase, for the share nobody claimed; from then on it runs the others'
+  // shares right after its own, in every later phase and region. (Before, it waited
+  // kHelpAfterSpins pauses at every phase: a 2-thread run on one core took 100 times as long
+  // as one thread.)
+  detail::PhaseRegion region;
+  std::size_t long_waits = 0;
+  for (int round = 0; round < 5; ++round) {
+    region.reset(30, 2);
+    check_region(region, 30, 2, 1);
+    long_waits += region.long_waits();
+  }
+  EXPECT_EQ(long_waits, 1u);
+}
+
+TEST(PhaseRegion, AWaiterThatSleepsWakesWhenTheShareFinishes) {
+  // Share 1 takes 20 ms in every phase: share 0's thread spins, finds nothing to take over,
+  // and sleeps until share 1 finishes. Every share still runs once, in phase order, and the
+  // sleeper wakes each time (a lost wake-up would hang here).
+  detail::PhaseRegion region(4, 2);
+  std::vector<std::atomic<int>> runs(8);
+  std::atomic<int> finished[4] = {0, 0, 0, 0};
+  std::atomic<int> out_of_order{0};
+  const auto run_share = [&](std::size_t phase, std::size_t share) {
+    if (phase != 0 && finished[phase - 1].load() != 2) ++out_of_order;
+    if (share == 1) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    ++runs[phase * 2 + share];
+    ++finished[phase];
+  };
+  std::thread other([&] { region.run(1, run_share); });
+  region.run(0, run_share);
+  other.join();
+  for (std::size_t i = 0; i < runs.size(); ++i) EXPECT_EQ(runs[i].load(), 1) << i;
+  EXPECT_EQ(out_of_order.load(), 0);
+  EXPECT_GE(region.long_waits(), 1u) << "share 0 waited past the help point";
 }
 
 TEST(PhaseRegion, TheSolverGivesTheSameBitsWithOrWithoutRegions) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -96,12 +97,18 @@ void UniformGrid::build_level(Level& level, std::span<const Aabb> boxes,
   for (std::size_t k = 0; k < n; ++k) ++start[cell_of_box_[k] + 1];
   for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
   level.entry_index.resize(n);
-  level.entry_box.resize(n);
+  for (int axis = 0; axis < 3; ++axis) {
+    // The padding overlaps nothing: lo above every coordinate, hi below.
+    level.entry_lo[axis].assign(n + Level::kPadding, std::numeric_limits<Real>::max());
+    level.entry_hi[axis].assign(n + Level::kPadding, std::numeric_limits<Real>::lowest());
+  }
   // start[c] serves as cell c's write cursor, then is shifted back.
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint32_t e = start[cell_of_box_[k]]++;
+    const Aabb& box = boxes[members[k]];
     level.entry_index[e] = members[k];
-    level.entry_box[e] = boxes[members[k]];
+    for (int axis = 0; axis < 3; ++axis)
+      level.entry_lo[axis][e] = box.lo[axis], level.entry_hi[axis][e] = box.hi[axis];
   }
   for (std::size_t c = cells; c > 0; --c) start[c] = start[c - 1];
   start[0] = 0;
@@ -125,7 +132,9 @@ void UniformGrid::self_pairs(std::vector<CandidatePair>& out) const {
   std::vector<Aabb> box_of(n);
   for (const Level& level : levels_)
     for (std::size_t e = 0; e < level.entry_index.size(); ++e)
-      box_of[level.entry_index[e]] = level.entry_box[e];
+      box_of[level.entry_index[e]] = {
+          {level.entry_lo[0][e], level.entry_lo[1][e], level.entry_lo[2][e]},
+          {level.entry_hi[0][e], level.entry_hi[1][e], level.entry_hi[2][e]}};
   chunks.run(
       n,
       [&](std::size_t i, std::vector<CandidatePair>& buffer) {

@@ -68,6 +68,27 @@ inline bool overlap(const Aabb& a, const Aabb& b) {
          b.lo[1] <= a.hi[1] && a.lo[2] <= b.hi[2] && b.lo[2] <= a.hi[2];
 }
 
+namespace detail {
+
+/// A grid level's boxes as the SIMD scan reads them: per axis the lower and upper bounds by
+/// entry (padded past the last entry, so a vector load never leaves the arrays), the cells'
+/// offsets and the grid's dimensions.
+struct GridLevelView {
+  const Real* lo[3];
+  const Real* hi[3];
+  const std::uint32_t* cell_start;
+  std::int64_t dims[3];
+};
+
+/// The entries of the cells x0..x1 × y0..y1 × z0..z1 (range = {x0, x1, y0, y1, z0, z1}) whose
+/// boxes overlap `query`: their entry numbers written to `hits`, one (y, z) row after the
+/// other and ascending within a row; returns how many. `hits` has room for every entry of
+/// those cells. Compiled per SIMD target, dispatched at run time (grid_scan.cpp).
+std::size_t overlapping_entries(const GridLevelView& level, const std::int64_t* range,
+                                const Aabb& query, std::uint32_t* hits);
+
+}  // namespace detail
+
 /// A candidate pair: query (or first box) and built box, ordered by (first, second).
 struct CandidatePair {
   std::uint32_t first;
@@ -133,7 +154,10 @@ class UniformGrid {
     std::int64_t dims[3] = {1, 1, 1};
     std::vector<std::uint32_t> cell_start;   // cells + 1 offsets into the entries
     std::vector<std::uint32_t> entry_index;  // by cell (x fastest), then box index
-    std::vector<Aabb> entry_box;
+    // The entries' boxes by axis (structure of arrays, for the SIMD scan), kPadding more
+    // entries that overlap nothing at the end.
+    std::vector<Real> entry_lo[3], entry_hi[3];
+    static constexpr std::size_t kPadding = 16;
 
     /// Cell coordinate of v on `axis`, clamped to the grid (a monotone map, so a box below
     /// or above the grid still meets every query that reaches that side). In double: a
@@ -166,14 +190,27 @@ void UniformGrid::Level::scan(const Aabb& query, std::uint32_t lowest_index, Vis
   const std::int64_t z0 = cell_coordinate(query.lo[2] - largest_extent[2] - rounding, 2),
                      z1 = cell_coordinate(query.hi[2], 2);
   // The cells x0..x1 of one (y, z) row are consecutive, and so are their entries: one run.
+  // The runs' entries bound the hits; the scan (SIMD, grid_scan.cpp) writes them to a buffer
+  // of the calling thread's own, grown to the largest query it has seen.
+  std::size_t most = 0;
   for (std::int64_t cz = z0; cz <= z1; ++cz)
     for (std::int64_t cy = y0; cy <= y1; ++cy) {
       const std::size_t row = std::size_t((cz * dims[1] + cy) * dims[0]);
-      for (std::uint32_t e = cell_start[row + std::size_t(x0)],
-                         end = cell_start[row + std::size_t(x1) + 1];
-           e < end; ++e)
-        if (entry_index[e] >= lowest_index && overlap(entry_box[e], query)) visit(entry_index[e]);
+      most += cell_start[row + std::size_t(x1) + 1] - cell_start[row + std::size_t(x0)];
     }
+  if (most == 0) return;
+  thread_local std::vector<std::uint32_t> hits;
+  if (hits.size() < most) hits.resize(most);
+  const detail::GridLevelView view{{entry_lo[0].data(), entry_lo[1].data(), entry_lo[2].data()},
+                                   {entry_hi[0].data(), entry_hi[1].data(), entry_hi[2].data()},
+                                   cell_start.data(),
+                                   {dims[0], dims[1], dims[2]}};
+  const std::int64_t range[6] = {x0, x1, y0, y1, z0, z1};
+  const std::size_t count = detail::overlapping_entries(view, range, query, hits.data());
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::uint32_t index = entry_index[hits[k]];
+    if (index >= lowest_index) visit(index);
+  }
 }
 
 }  // namespace tessera

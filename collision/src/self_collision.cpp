@@ -26,6 +26,7 @@
 
 #include "chunked_output.hpp"
 #include "closest_distance.hpp"
+#include "segment_distances.hpp"
 
 namespace tessera {
 
@@ -132,6 +133,42 @@ Real relative_motion(const Vector3r* motion, const std::uint32_t (&a)[N],
   for (const std::uint32_t i : a)
     for (const std::uint32_t j : b) most = std::max(most, (motion[i] - motion[j]).squaredNorm());
   return std::sqrt(most);
+}
+
+/// The edges one edge's query met, their anchors by coordinate and the larger budget of
+/// each, for the batched segment distances; one per thread, kept (allocation-free once grown).
+struct EdgeBatch {
+  std::vector<std::uint32_t> edges;
+  std::vector<Real> px, py, pz, qx, qy, qz, budget, squared;
+
+  std::size_t count() const { return edges.size(); }
+  void clear() {
+    edges.clear();
+    for (std::vector<Real>* v : {&px, &py, &pz, &qx, &qy, &qz, &budget}) v->clear();
+  }
+  void add(std::uint32_t edge, const Vector3r& p, const Vector3r& q, Real larger_budget) {
+    edges.push_back(edge);
+    px.push_back(p.x()), py.push_back(p.y()), pz.push_back(p.z());
+    qx.push_back(q.x()), qy.push_back(q.y()), qz.push_back(q.z());
+    budget.push_back(larger_budget);
+  }
+  /// Squared distances from segment (p, q) to each edge of the batch.
+  const Real* measure(const Vector3r& p, const Vector3r& q) {
+    const std::size_t n = count();
+    const std::size_t padded =
+        (n + detail::kSegmentBatchLanes - 1) / detail::kSegmentBatchLanes * detail::kSegmentBatchLanes;
+    for (std::vector<Real>* v : {&px, &py, &pz, &qx, &qy, &qz}) v->resize(padded, Real(0));
+    squared.resize(padded);
+    detail::squared_segment_distances(
+        p, q, {px.data(), py.data(), pz.data(), qx.data(), qy.data(), qz.data(), n},
+        squared.data());
+    return squared.data();
+  }
+};
+
+EdgeBatch& edge_batch() {
+  thread_local EdgeBatch batch;
+  return batch;
 }
 
 template <class Body>
@@ -347,15 +384,44 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
       },
       candidate_triangle_point_);
 
-  // Edge–edge: each edge against the higher edges its box meets.
+  // Edge–edge: each edge against the higher edges its box meets, their distances a vector
+  // at a time (segment_distances.cpp). Those round as the scalar rule may not, so the
+  // candidate distance is widened by the filter's rounding allowance: a few more candidates,
+  // never one fewer (the filter then tests each exactly).
+  Real largest_coordinate = 0;
+  for (const Vector3r& a : anchor_) largest_coordinate = std::max(largest_coordinate, a.cwiseAbs().maxCoeff());
+  const Real widening = Real(1e-3) * reach + kAllowancePerCoordinate * largest_coordinate;
   chunks_->edge_edge_candidates.run(
       edge_queries,
       [&](std::size_t edge, std::vector<Candidate>& buffer) {
         const std::uint32_t e = std::uint32_t(edge);
+        const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
         const std::size_t first = buffer.size();
+        EdgeBatch& batch = edge_batch();
+        batch.clear();
+        const Particles particles{positions};
         edge_grid_.for_each_overlap_above(edge_boxes_[e], e, [&](std::uint32_t f) {
-          add_edge_edge_candidate(e, f, reach, positions, buffer);
+          const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
+          if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3) return;
+          if (particles.all_static({p0, p1, p2, p3})) return;
+          batch.add(f, anchor_[p2], anchor_[p3], std::max(budget_[p2], budget_[p3]));
         });
+        if (batch.count() != 0) {
+          const Real tiny = kDegenerateTolerance * kDegenerateTolerance;
+          if ((anchor_[p1] - anchor_[p0]).squaredNorm() <= tiny) {
+            // A point-like edge: the scalar rule, which handles it.
+            for (const std::uint32_t f : batch.edges)
+              add_edge_edge_candidate(e, f, reach, positions, buffer);
+          } else {
+            const Real* squared = batch.measure(anchor_[p0], anchor_[p1]);
+            const Real own = reach + std::max(budget_[p0], budget_[p1]) + widening;
+            for (std::size_t k = 0; k < batch.count(); ++k) {
+              const Real within = own + batch.budget[k];
+              if (squared[k] < within * within)
+                buffer.push_back({e, batch.edges[k], std::sqrt(squared[k])});
+            }
+          }
+        }
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
                   [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
       },

@@ -1,0 +1,91 @@
+// Squared distances from one segment to many (the edge–edge pairs of a self-collision
+// build), a vector of segments at a time: compiled once per SIMD target (Highway
+// foreach_target) and dispatched at run time. The same closest-point rule as
+// squared_segment_distance (closest_distance.hpp; Ericson §5.1.9), its branches as lane
+// selects:
+//
+//   d1 = q1 − p1, d2 = q2 − p2, r = p1 − p2;  a = d1·d1, e = d2·d2, b = d1·d2, c = d1·r, f = d2·r
+//   s = clamp((b f − c e) / (a e − b²), 0, 1)   (0 for parallel segments)
+//   t = (b s + f) / e;  t < 0: t = 0, s = clamp(−c / a);  t > 1: t = 1, s = clamp((b − c) / a)
+//   (e ≈ 0: t = 0, s = clamp(−c / a))
+//   distance² = |p1 + s d1 − p2 − t d2|²
+//
+// The lanes round as the scalar function may not (fused multiply–adds, another order), by a
+// few units in the last place: callers that compare against a bound widen it (see
+// SelfCollision::build).
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "segment_distances.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+#include "segment_distances.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace tessera {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+void SquaredSegmentDistances(const Vector3r& p1, const Vector3r& q1,
+                             const detail::SegmentBatch& batch, Real* out) {
+  const hn::ScalableTag<Real> d;
+  const std::size_t lanes = hn::Lanes(d);
+  const Real tiny_scalar = kDegenerateTolerance * kDegenerateTolerance;
+  const auto zero = hn::Zero(d), one = hn::Set(d, Real(1)), tiny = hn::Set(d, tiny_scalar);
+  const auto p1x = hn::Set(d, p1.x()), p1y = hn::Set(d, p1.y()), p1z = hn::Set(d, p1.z());
+  const Vector3r d1s = q1 - p1;
+  const auto d1x = hn::Set(d, d1s.x()), d1y = hn::Set(d, d1s.y()), d1z = hn::Set(d, d1s.z());
+  const auto a = hn::Set(d, d1s.squaredNorm());
+  const auto inverse_a = hn::Div(one, a);
+  const auto clamp01 = [&](auto v) { return hn::Min(hn::Max(v, zero), one); };
+  for (std::size_t i = 0; i < batch.count; i += lanes) {
+    const auto p2x = hn::LoadU(d, batch.px + i), p2y = hn::LoadU(d, batch.py + i),
+               p2z = hn::LoadU(d, batch.pz + i);
+    const auto d2x = hn::Sub(hn::LoadU(d, batch.qx + i), p2x),
+               d2y = hn::Sub(hn::LoadU(d, batch.qy + i), p2y),
+               d2z = hn::Sub(hn::LoadU(d, batch.qz + i), p2z);
+    const auto rx = hn::Sub(p1x, p2x), ry = hn::Sub(p1y, p2y), rz = hn::Sub(p1z, p2z);
+    const auto dot = [](auto ax, auto ay, auto az, auto bx, auto by, auto bz) {
+      return hn::MulAdd(az, bz, hn::MulAdd(ay, by, hn::Mul(ax, bx)));
+    };
+    const auto e = dot(d2x, d2y, d2z, d2x, d2y, d2z);
+    const auto f = dot(d2x, d2y, d2z, rx, ry, rz);
+    const auto c = dot(d1x, d1y, d1z, rx, ry, rz);
+    const auto b = dot(d1x, d1y, d1z, d2x, d2y, d2z);
+    const auto denominator = hn::NegMulAdd(b, b, hn::Mul(a, e));
+    const auto s_free = hn::IfThenElseZero(
+        hn::Gt(denominator, zero),
+        clamp01(hn::Div(hn::MulSub(b, f, hn::Mul(c, e)), denominator)));
+    const auto t_free = hn::Div(hn::MulAdd(b, s_free, f), e);
+    const auto s_at_0 = clamp01(hn::Mul(hn::Neg(c), inverse_a));
+    const auto s_at_1 = clamp01(hn::Mul(hn::Sub(b, c), inverse_a));
+    const auto below = hn::Lt(t_free, zero), above = hn::Gt(t_free, one);
+    auto s = hn::IfThenElse(below, s_at_0, hn::IfThenElse(above, s_at_1, s_free));
+    auto t = hn::IfThenElse(below, zero, hn::IfThenElse(above, one, t_free));
+    // A point-like second segment: the first's point nearest p2.
+    const auto point_like = hn::Le(e, tiny);
+    s = hn::IfThenElse(point_like, s_at_0, s);
+    t = hn::IfThenElseZero(hn::Not(point_like), t);
+    const auto gx = hn::Sub(hn::MulAdd(s, d1x, rx), hn::Mul(t, d2x));
+    const auto gy = hn::Sub(hn::MulAdd(s, d1y, ry), hn::Mul(t, d2y));
+    const auto gz = hn::Sub(hn::MulAdd(s, d1z, rz), hn::Mul(t, d2z));
+    hn::StoreU(dot(gx, gy, gz, gx, gy, gz), d, out + i);
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace tessera
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace tessera::detail {
+
+HWY_EXPORT(SquaredSegmentDistances);
+
+void squared_segment_distances(const Vector3r& p1, const Vector3r& q1, const SegmentBatch& batch,
+                               Real* out) {
+  HWY_DYNAMIC_DISPATCH(SquaredSegmentDistances)(p1, q1, batch, out);
+}
+
+}  // namespace tessera::detail
+#endif

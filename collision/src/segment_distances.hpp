@@ -1,0 +1,27 @@
+// Squared distances from one segment to a batch of segments, SIMD (segment_distances.cpp).
+#pragma once
+
+#include <cstddef>
+
+#include <tessera/core/real.hpp>
+
+#include "closest_distance.hpp"
+
+namespace tessera::detail {
+
+/// Segments (p, q) by coordinate, `count` of them; every array readable to `count` rounded
+/// up to a multiple of kSegmentBatchLanes (the lanes past `count` are computed and ignored).
+struct SegmentBatch {
+  const Real *px, *py, *pz, *qx, *qy, *qz;
+  std::size_t count;
+};
+/// The widest vector the dispatch may pick, in lanes of Real (AVX-512 float).
+inline constexpr std::size_t kSegmentBatchLanes = 16;
+
+/// out[k] = the squared distance between segment (p1, q1) and the batch's segment k, for k
+/// below count rounded up to the lanes (out has that room). p1 ≠ q1 (not point-like: the
+/// caller measures a point-like first segment with squared_segment_distance).
+void squared_segment_distances(const Vector3r& p1, const Vector3r& q1, const SegmentBatch& batch,
+                               Real* out);
+
+}  // namespace tessera::detail

@@ -1,10 +1,11 @@
 // The uniform grid's query scan (spatial_hash.hpp), compiled once per SIMD target (Highway
 // foreach_target) and dispatched at run time: each run of entries is tested a vector of boxes
 // at a time (the six comparisons of an overlap as lane masks), and the overlapping entries'
-// numbers are written out.
+// box indices are written out.
 //
 //   run of one (y, z) row:  e0 e1 e2 e3 e4 e5 e6 e7 │ e8 e9 ...     (entries of cells x0..x1)
-//   per vector:             lo ≤ q.hi and q.lo ≤ hi on x, y, z  ──►  mask  ──►  hit numbers
+//   per vector:             lo ≤ q.hi and q.lo ≤ hi on x, y, z,  ──►  mask  ──►  the boxes'
+//                           box index ≥ the lowest asked for            indices
 //
 // Why: the scalar scan branched on every entry (most fail on x, but which ones is not
 // predictable), and it was the largest single cost of a self-collision build (a quarter of
@@ -23,9 +24,16 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 std::size_t OverlappingEntries(const detail::GridLevelView& level, const std::int64_t* range,
-                               const Aabb& query, std::uint32_t* hits) {
+                               const Aabb& query, std::uint32_t lowest_index,
+                               std::uint32_t* hits) {
   const hn::ScalableTag<Real> d;
   const std::size_t lanes = hn::Lanes(d);
+  // Float lanes hold the box indices' test too (32 bits each); double lanes leave it to the
+  // scalar loop over the hits.
+  constexpr bool kIndexLanes = sizeof(Real) == sizeof(std::uint32_t);
+  // As signed lanes (box indices stay below 2^31): index > lowest − 1.
+  const hn::RebindToSigned<decltype(d)> di;
+  const auto below_lowest = hn::Set(di, hn::TFromD<decltype(di)>(std::int64_t(lowest_index) - 1));
   const auto qlx = hn::Set(d, query.lo[0]), qly = hn::Set(d, query.lo[1]),
              qlz = hn::Set(d, query.lo[2]);
   const auto qhx = hn::Set(d, query.hi[0]), qhy = hn::Set(d, query.hi[1]),
@@ -41,6 +49,11 @@ std::size_t OverlappingEntries(const detail::GridLevelView& level, const std::in
         // arrays are padded, so the load stays inside them).
         auto m = hn::And(hn::FirstN(d, end - e), hn::Le(hn::LoadU(d, level.lo[0] + e), qhx));
         m = hn::And(m, hn::Le(qlx, hn::LoadU(d, level.hi[0] + e)));
+        if constexpr (kIndexLanes) {
+          const auto index = hn::LoadU(di, reinterpret_cast<const hn::TFromD<decltype(di)>*>(
+                                               level.index + e));
+          m = hn::And(m, hn::RebindMask(d, hn::Gt(index, below_lowest)));
+        }
         if (hn::AllFalse(d, m)) continue;
         m = hn::And(m, hn::Le(hn::LoadU(d, level.lo[1] + e), qhy));
         m = hn::And(m, hn::Le(qly, hn::LoadU(d, level.hi[1] + e)));
@@ -49,8 +62,10 @@ std::size_t OverlappingEntries(const detail::GridLevelView& level, const std::in
         std::uint8_t bits[8] = {};
         hn::StoreMaskBits(d, m, bits);
         std::uint32_t word = std::uint32_t(bits[0]) | std::uint32_t(bits[1]) << 8;  // ≤ 16 lanes
-        for (; word != 0; word &= word - 1)
-          hits[count++] = std::uint32_t(e) + std::uint32_t(__builtin_ctz(word));
+        for (; word != 0; word &= word - 1) {
+          const std::uint32_t index = level.index[e + std::size_t(__builtin_ctz(word))];
+          if (kIndexLanes || index >= lowest_index) hits[count++] = index;
+        }
       }
     }
   return count;
@@ -66,8 +81,9 @@ namespace tessera::detail {
 HWY_EXPORT(OverlappingEntries);
 
 std::size_t overlapping_entries(const GridLevelView& level, const std::int64_t* range,
-                                const Aabb& query, std::uint32_t* hits) {
-  return HWY_DYNAMIC_DISPATCH(OverlappingEntries)(level, range, query, hits);
+                                const Aabb& query, std::uint32_t lowest_index,
+                                std::uint32_t* hits) {
+  return HWY_DYNAMIC_DISPATCH(OverlappingEntries)(level, range, query, lowest_index, hits);
 }
 
 }  // namespace tessera::detail

@@ -96,7 +96,8 @@ void UniformGrid::build_level(Level& level, std::span<const Aabb> boxes,
   start.assign(cells + 1, 0);
   for (std::size_t k = 0; k < n; ++k) ++start[cell_of_box_[k] + 1];
   for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
-  level.entry_index.resize(n);
+  level.count = n;
+  level.entry_index.assign(n + Level::kPadding, 0);
   for (int axis = 0; axis < 3; ++axis) {
     // The padding overlaps nothing: lo above every coordinate, hi below.
     level.entry_lo[axis].assign(n + Level::kPadding, std::numeric_limits<Real>::max());
@@ -131,7 +132,7 @@ void UniformGrid::self_pairs(std::vector<CandidatePair>& out) const {
   // Box i's query is its own box: the entries are looked up by index, not by position.
   std::vector<Aabb> box_of(n);
   for (const Level& level : levels_)
-    for (std::size_t e = 0; e < level.entry_index.size(); ++e)
+    for (std::size_t e = 0; e < level.count; ++e)
       box_of[level.entry_index[e]] = {
           {level.entry_lo[0][e], level.entry_lo[1][e], level.entry_lo[2][e]},
           {level.entry_hi[0][e], level.entry_hi[1][e], level.entry_hi[2][e]}};

@@ -76,16 +76,19 @@ namespace detail {
 struct GridLevelView {
   const Real* lo[3];
   const Real* hi[3];
+  const std::uint32_t* index;  // the box index of each entry (padded as the bounds)
   const std::uint32_t* cell_start;
   std::int64_t dims[3];
 };
 
 /// The entries of the cells x0..x1 × y0..y1 × z0..z1 (range = {x0, x1, y0, y1, z0, z1}) whose
-/// boxes overlap `query`: their entry numbers written to `hits`, one (y, z) row after the
-/// other and ascending within a row; returns how many. `hits` has room for every entry of
-/// those cells. Compiled per SIMD target, dispatched at run time (grid_scan.cpp).
+/// boxes overlap `query` and whose box index is at least `lowest_index`: their box indices
+/// written to `hits`, one (y, z) row after the other and in entry order within a row; returns
+/// how many. `hits` has room for every entry of those cells. Compiled per SIMD target,
+/// dispatched at run time (grid_scan.cpp).
 std::size_t overlapping_entries(const GridLevelView& level, const std::int64_t* range,
-                                const Aabb& query, std::uint32_t* hits);
+                                const Aabb& query, std::uint32_t lowest_index,
+                                std::uint32_t* hits);
 
 }  // namespace detail
 
@@ -106,11 +109,11 @@ class UniformGrid {
   /// InvalidInput for a box that is not finite (a NaN would leave the cell count undefined).
   void build(std::span<const Aabb> boxes, Real cell_size = 0);
 
-  std::size_t size() const { return levels_[0].entry_index.size() + levels_[1].entry_index.size(); }
+  std::size_t size() const { return levels_[0].count + levels_[1].count; }
   /// The cell of the ordinary boxes' level.
   Real cell_size() const { return Real(levels_[0].cell_size); }
   /// How many boxes went to the level of large boxes.
-  std::size_t large_box_count() const { return levels_[1].entry_index.size(); }
+  std::size_t large_box_count() const { return levels_[1].count; }
 
   /// Calls visit(i) once for every built box i overlapping `query`, in no fixed order.
   template <class Visit>
@@ -153,9 +156,10 @@ class UniformGrid {
     double origin[3] = {0, 0, 0};
     std::int64_t dims[3] = {1, 1, 1};
     std::vector<std::uint32_t> cell_start;   // cells + 1 offsets into the entries
+    std::size_t count = 0;                   // boxes in this level
     std::vector<std::uint32_t> entry_index;  // by cell (x fastest), then box index
     // The entries' boxes by axis (structure of arrays, for the SIMD scan), kPadding more
-    // entries that overlap nothing at the end.
+    // entries that overlap nothing at the end (entry_index is padded too).
     std::vector<Real> entry_lo[3], entry_hi[3];
     static constexpr std::size_t kPadding = 16;
 
@@ -179,7 +183,7 @@ class UniformGrid {
 
 template <class Visit>
 void UniformGrid::Level::scan(const Aabb& query, std::uint32_t lowest_index, Visit& visit) const {
-  if (entry_index.empty()) return;
+  if (count == 0) return;
   // A box overlapping the query has its lower corner in [query.lo - extent, query.hi]; the
   // 1e-6 of a cell covers the rounding of that subtraction.
   const double rounding = 1e-6 * cell_size;
@@ -203,14 +207,13 @@ void UniformGrid::Level::scan(const Aabb& query, std::uint32_t lowest_index, Vis
   if (hits.size() < most) hits.resize(most);
   const detail::GridLevelView view{{entry_lo[0].data(), entry_lo[1].data(), entry_lo[2].data()},
                                    {entry_hi[0].data(), entry_hi[1].data(), entry_hi[2].data()},
+                                   entry_index.data(),
                                    cell_start.data(),
                                    {dims[0], dims[1], dims[2]}};
   const std::int64_t range[6] = {x0, x1, y0, y1, z0, z1};
-  const std::size_t count = detail::overlapping_entries(view, range, query, hits.data());
-  for (std::size_t k = 0; k < count; ++k) {
-    const std::uint32_t index = entry_index[hits[k]];
-    if (index >= lowest_index) visit(index);
-  }
+  const std::size_t found =
+      detail::overlapping_entries(view, range, query, lowest_index, hits.data());
+  for (std::size_t k = 0; k < found; ++k) visit(hits[k]);
 }
 
 }  // namespace tessera

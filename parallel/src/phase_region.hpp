@@ -16,9 +16,9 @@
 // claimed, then sleep on the phase's count (a futex, std::atomic::wait) until a share
 // finishes. The sleep is for a busy machine: a thread the OS has descheduled in the middle of
 // its share holds the phase for a whole time slice, and a waiter that kept spinning or
-// yielding took the core it needed. Measured beside two busy loops on 2 cores
-// (`tessera run cloth:10 --mode gs --iterations 100 --substeps 1 --frames 300 --threads 2`):
-// see kSleepAfterSpins.
+// yielding took the core it needed. Measured in docs/performance.md, "The phase region on a
+// busy machine". (The spins are counted in pauses, whose length varies by CPU, about 10 to 150
+// cycles; on a CPU without a pause instruction each spin is a yield.)
 //
 // A share's blocks are one colour's: no two touch the same movable particle, so who runs a
 // share does not change a bit of the result, and the phases run strictly in order. A share is
@@ -79,32 +79,36 @@ class PhaseRegion {
     }
     phases_ = phases;
     shares_ = shares;
-    long_waits_.store(0, std::memory_order_relaxed);
+    waits_.long_waits.store(0, std::memory_order_relaxed);
+    waits_.sleeps.store(0, std::memory_order_relaxed);
     for (std::size_t i = 0; i < phases * shares; ++i) claimed_[i].store(0, std::memory_order_relaxed);
     for (std::size_t k = 0; k < phases; ++k) done_[k].store(0, std::memory_order_relaxed);
   }
+
+  /// The waits since reset() that lasted kHelpAfterSpins (a thread late, absent or
+  /// descheduled): what a region one thread runs alone avoids after the first.
+  std::size_t long_waits() const { return waits_.long_waits.load(std::memory_order_relaxed); }
+  /// The waits since reset() that slept (kSleepAfterSpins).
+  std::size_t sleeps() const { return waits_.sleeps.load(std::memory_order_relaxed); }
 
   /// Thread `share`'s part of the region: run_share(phase, share) for every share it claims.
   /// A thread that had to run another's share (its thread was late or absent: TBB gave the
   /// region fewer threads than shares, or the OS descheduled one) runs the unclaimed shares
   /// of the next phase right after its own, without waiting first, until it finds them
   /// claimed by their owners: so a region that one thread runs alone costs no wait per phase.
-  /// The waits since reset() that lasted kHelpAfterSpins (a thread late, absent or
-  /// descheduled): what a region one thread runs alone avoids after the first.
-  std::size_t long_waits() const { return long_waits_.load(std::memory_order_relaxed); }
-
   /// Share 0's thread starts a region the way it ended the last one (alone or not): a region
   /// run by one thread alone, region after region, then waits for nobody at all.
   template <class RunShare>
   void run(std::size_t share, RunShare&& run_share) {
-    bool alone = share == 0 && alone_at_end_.load(std::memory_order_relaxed);
+    if (phases_ == 0) return;
+    bool alone = share == 0 && waits_.alone_at_end.load(std::memory_order_relaxed);
     for (std::size_t k = 0; k < phases_; ++k) {
       if (k != 0 && wait_for(k - 1, run_share)) alone = true;
       run_if_claimed(k, share, run_share);
       if (alone) alone = run_unclaimed(k, run_share);
     }
     if (wait_for(phases_ - 1, run_share)) alone = true;
-    if (share == 0) alone_at_end_.store(alone, std::memory_order_relaxed);
+    if (share == 0) waits_.alone_at_end.store(alone, std::memory_order_relaxed);
   }
 
  private:
@@ -126,13 +130,17 @@ class PhaseRegion {
     struct Done {
       std::atomic<std::uint32_t>& count;
       std::atomic<std::uint32_t>& sleepers;
+      std::size_t shares;
       ~Done() {
         // Sequentially consistent with the sleeper's count and re-check (wait_for): either
-        // this sees the sleeper and wakes it, or the sleeper sees the new count.
-        count.fetch_add(1, std::memory_order_seq_cst);
-        if (sleepers.load(std::memory_order_seq_cst) != 0) count.notify_all();
+        // the last share's thread sees the sleeper and wakes it, or the sleeper sees the
+        // phase done. (A sleeper waits for the last share only: every share was claimed
+        // before it slept, so there is nothing left for it to take over.)
+        if (count.fetch_add(1, std::memory_order_seq_cst) + 1 == shares &&
+            sleepers.load(std::memory_order_seq_cst) != 0)
+          count.notify_all();
       }
-    } done{done_[phase], sleepers_.count};
+    } done{done_[phase], waits_.sleepers, shares_};
     run_share(phase, share);
     return true;
   }
@@ -150,7 +158,7 @@ class PhaseRegion {
         continue;
       }
       if (spins == kHelpAfterSpins) {
-        long_waits_.fetch_add(1, std::memory_order_relaxed);
+        waits_.long_waits.fetch_add(1, std::memory_order_relaxed);
         helped = run_unclaimed(phase, run_share);
       }
       if (spins < kSleepAfterSpins) {
@@ -158,24 +166,25 @@ class PhaseRegion {
         continue;
       }
       // Every share is claimed (above); sleep until the count moves from `seen`.
-      sleepers_.count.fetch_add(1, std::memory_order_seq_cst);
+      waits_.sleeps.fetch_add(1, std::memory_order_relaxed);
+      waits_.sleepers.fetch_add(1, std::memory_order_seq_cst);
       seen = done.load(std::memory_order_seq_cst);
       if (seen != shares_) done.wait(seen, std::memory_order_seq_cst);
-      sleepers_.count.fetch_sub(1, std::memory_order_seq_cst);
+      waits_.sleepers.fetch_sub(1, std::memory_order_seq_cst);
     }
     return helped;
   }
 
-  /// The threads asleep in wait_for, on a cache line of its own (every finished share reads
-  /// it).
-  struct alignas(64) Sleepers {
-    std::atomic<std::uint32_t> count{0};
+  /// What waiting writes, on a cache line of its own (away from the fields every share
+  /// reads): the threads asleep in wait_for (read by each phase's last share), whether share
+  /// 0's thread ran other shares at the end of the last region (a hint only: who runs a share
+  /// never changes the result), and the counts for tests.
+  struct alignas(64) Waits {
+    std::atomic<std::uint32_t> sleepers{0};
+    std::atomic<bool> alone_at_end{false};
+    std::atomic<std::size_t> long_waits{0}, sleeps{0};
   };
-  Sleepers sleepers_;
-  /// Whether share 0's thread ran other shares at the end of the last region (a hint only:
-  /// who runs a share never changes the result).
-  std::atomic<bool> alone_at_end_{false};
-  std::atomic<std::size_t> long_waits_{0};
+  Waits waits_;
   std::size_t phases_ = 0, shares_ = 0;
   std::size_t claimed_capacity_ = 0, done_capacity_ = 0;
   std::unique_ptr<std::atomic<std::uint8_t>[]> claimed_;

@@ -308,6 +308,9 @@ class SelfCollision {
   std::vector<std::uint32_t> new_triangles_, new_edges_, outran_;
   std::vector<Candidate> found_triangle_point_, found_others_, found_edge_edge_, merged_;
   std::vector<Departure> departure_;  // per particle, this substep's
+  // Per vertex w + m, per triangle and per edge the largest w plus the largest m of its
+  // corners: the filter's bound, this substep's.
+  std::vector<Real> vertex_spread_, triangle_spread_, edge_spread_;
   Real departure_allowance_ = 0;      // rounding room of the filter's bound
   std::vector<std::uint32_t> outran_scratch_;  // measure_departures' list when none is asked
   /// The allowance per unit of the largest coordinate.

@@ -26,7 +26,9 @@ namespace hn = hwy::HWY_NAMESPACE;
 std::size_t OverlappingEntries(const detail::GridLevelView& level, const std::int64_t* range,
                                const Aabb& query, std::uint32_t lowest_index,
                                std::uint32_t* hits) {
-  const hn::ScalableTag<Real> d;
+  // At most 16 lanes: the levels' arrays are padded by that (UniformGrid::Level::kPadding)
+  // and the mask bits are read as 16.
+  const hn::CappedTag<Real, 16> d;
   const std::size_t lanes = hn::Lanes(d);
   // Float lanes hold the box indices' test too (32 bits each); double lanes leave it to the
   // scalar loop over the hits.

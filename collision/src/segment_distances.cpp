@@ -10,9 +10,13 @@
 //   (e ≈ 0: t = 0, s = clamp(−c / a))
 //   distance² = |p1 + s d1 − p2 − t d2|²
 //
-// The lanes round as the scalar function may not (fused multiply–adds, another order), by a
-// few units in the last place: callers that compare against a bound widen it (see
-// SelfCollision::build).
+// Each lane computes the scalar function's operations in its order (Eigen's x + (y + z) for
+// dot products, true divisions), and the module is compiled without floating-point
+// contraction (no fused multiply–add on one side and not the other): the same bits as
+// squared_segment_distance on every target, so a batch finds exactly the scalar rule's
+// candidates (tests/collision/test_self_collision.cpp checks it on every target the machine
+// runs, nearly parallel segments included: there an FMA had moved the closest points by
+// 5·10⁻⁴ of the length).
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "segment_distances.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -28,16 +32,20 @@ namespace hn = hwy::HWY_NAMESPACE;
 
 void SquaredSegmentDistances(const Vector3r& p1, const Vector3r& q1,
                              const detail::SegmentBatch& batch, Real* out) {
-  const hn::ScalableTag<Real> d;
+  // At most kSegmentBatchLanes lanes: the callers pad to that.
+  const hn::CappedTag<Real, detail::kSegmentBatchLanes> d;
   const std::size_t lanes = hn::Lanes(d);
-  const Real tiny_scalar = kDegenerateTolerance * kDegenerateTolerance;
-  const auto zero = hn::Zero(d), one = hn::Set(d, Real(1)), tiny = hn::Set(d, tiny_scalar);
+  const auto zero = hn::Zero(d), one = hn::Set(d, Real(1));
+  const auto tiny = hn::Set(d, kDegenerateTolerance * kDegenerateTolerance);
   const auto p1x = hn::Set(d, p1.x()), p1y = hn::Set(d, p1.y()), p1z = hn::Set(d, p1.z());
   const Vector3r d1s = q1 - p1;
   const auto d1x = hn::Set(d, d1s.x()), d1y = hn::Set(d, d1s.y()), d1z = hn::Set(d, d1s.z());
   const auto a = hn::Set(d, d1s.squaredNorm());
-  const auto inverse_a = hn::Div(one, a);
   const auto clamp01 = [&](auto v) { return hn::Min(hn::Max(v, zero), one); };
+  // Eigen's order for a 3-vector's dot product and squared norm: x + (y + z).
+  const auto dot = [](auto ax, auto ay, auto az, auto bx, auto by, auto bz) {
+    return hn::Add(hn::Mul(ax, bx), hn::Add(hn::Mul(ay, by), hn::Mul(az, bz)));
+  };
   for (std::size_t i = 0; i < batch.count; i += lanes) {
     const auto p2x = hn::LoadU(d, batch.px + i), p2y = hn::LoadU(d, batch.py + i),
                p2z = hn::LoadU(d, batch.pz + i);
@@ -45,20 +53,18 @@ void SquaredSegmentDistances(const Vector3r& p1, const Vector3r& q1,
                d2y = hn::Sub(hn::LoadU(d, batch.qy + i), p2y),
                d2z = hn::Sub(hn::LoadU(d, batch.qz + i), p2z);
     const auto rx = hn::Sub(p1x, p2x), ry = hn::Sub(p1y, p2y), rz = hn::Sub(p1z, p2z);
-    const auto dot = [](auto ax, auto ay, auto az, auto bx, auto by, auto bz) {
-      return hn::MulAdd(az, bz, hn::MulAdd(ay, by, hn::Mul(ax, bx)));
-    };
     const auto e = dot(d2x, d2y, d2z, d2x, d2y, d2z);
     const auto f = dot(d2x, d2y, d2z, rx, ry, rz);
     const auto c = dot(d1x, d1y, d1z, rx, ry, rz);
     const auto b = dot(d1x, d1y, d1z, d2x, d2y, d2z);
-    const auto denominator = hn::NegMulAdd(b, b, hn::Mul(a, e));
+    const auto denominator = hn::Sub(hn::Mul(a, e), hn::Mul(b, b));
+    // The lanes that do not take a branch compute it anyway (a 0/0 there is discarded).
     const auto s_free = hn::IfThenElseZero(
         hn::Gt(denominator, zero),
-        clamp01(hn::Div(hn::MulSub(b, f, hn::Mul(c, e)), denominator)));
-    const auto t_free = hn::Div(hn::MulAdd(b, s_free, f), e);
-    const auto s_at_0 = clamp01(hn::Mul(hn::Neg(c), inverse_a));
-    const auto s_at_1 = clamp01(hn::Mul(hn::Sub(b, c), inverse_a));
+        clamp01(hn::Div(hn::Sub(hn::Mul(b, f), hn::Mul(c, e)), denominator)));
+    const auto t_free = hn::Div(hn::Add(hn::Mul(b, s_free), f), e);
+    const auto s_at_0 = clamp01(hn::Div(hn::Neg(c), a));
+    const auto s_at_1 = clamp01(hn::Div(hn::Sub(b, c), a));
     const auto below = hn::Lt(t_free, zero), above = hn::Gt(t_free, one);
     auto s = hn::IfThenElse(below, s_at_0, hn::IfThenElse(above, s_at_1, s_free));
     auto t = hn::IfThenElse(below, zero, hn::IfThenElse(above, one, t_free));
@@ -66,9 +72,10 @@ void SquaredSegmentDistances(const Vector3r& p1, const Vector3r& q1,
     const auto point_like = hn::Le(e, tiny);
     s = hn::IfThenElse(point_like, s_at_0, s);
     t = hn::IfThenElseZero(hn::Not(point_like), t);
-    const auto gx = hn::Sub(hn::MulAdd(s, d1x, rx), hn::Mul(t, d2x));
-    const auto gy = hn::Sub(hn::MulAdd(s, d1y, ry), hn::Mul(t, d2y));
-    const auto gz = hn::Sub(hn::MulAdd(s, d1z, rz), hn::Mul(t, d2z));
+    // (p1 + s d1) − (p2 + t d2), as the scalar rule writes it.
+    const auto gx = hn::Sub(hn::Add(p1x, hn::Mul(s, d1x)), hn::Add(p2x, hn::Mul(t, d2x)));
+    const auto gy = hn::Sub(hn::Add(p1y, hn::Mul(s, d1y)), hn::Add(p2y, hn::Mul(t, d2y)));
+    const auto gz = hn::Sub(hn::Add(p1z, hn::Mul(s, d1z)), hn::Add(p2z, hn::Mul(t, d2z)));
     hn::StoreU(dot(gx, gy, gz, gx, gy, gz), d, out + i);
   }
 }

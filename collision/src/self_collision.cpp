@@ -385,12 +385,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
       candidate_triangle_point_);
 
   // Edge–edge: each edge against the higher edges its box meets, their distances a vector
-  // at a time (segment_distances.cpp). Those round as the scalar rule may not, so the
-  // candidate distance is widened by the filter's rounding allowance: a few more candidates,
-  // never one fewer (the filter then tests each exactly).
-  Real largest_coordinate = 0;
-  for (const Vector3r& a : anchor_) largest_coordinate = std::max(largest_coordinate, a.cwiseAbs().maxCoeff());
-  const Real widening = Real(1e-3) * reach + kAllowancePerCoordinate * largest_coordinate;
+  // at a time (segment_distances.cpp: the same bits as add_edge_edge_candidate's).
   chunks_->edge_edge_candidates.run(
       edge_queries,
       [&](std::size_t edge, std::vector<Candidate>& buffer) {
@@ -414,9 +409,9 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
               add_edge_edge_candidate(e, f, reach, positions, buffer);
           } else {
             const Real* squared = batch.measure(anchor_[p0], anchor_[p1]);
-            const Real own = reach + std::max(budget_[p0], budget_[p1]) + widening;
+            const Real own = reach + std::max(budget_[p0], budget_[p1]);
             for (std::size_t k = 0; k < batch.count(); ++k) {
-              const Real within = own + batch.budget[k];
+              const Real within = own + batch.budget[k];  // as add_edge_edge_candidate
               if (squared[k] < within * within)
                 buffer.push_back({e, batch.edges[k], std::sqrt(squared[k])});
             }

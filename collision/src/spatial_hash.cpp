@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -17,6 +18,9 @@ namespace tessera {
 
 void UniformGrid::build(std::span<const Aabb> boxes, Real cell_size) {
   const std::size_t n = boxes.size();
+  // The scan compares box indices as 32-bit signed lanes (grid_scan.cpp).
+  if (n > std::size_t(std::numeric_limits<std::int32_t>::max()))
+    throw InvalidInput("collision grid: " + std::to_string(n) + " boxes, more than 2^31 - 1");
   const auto largest_extent = [](const Aabb& box) {
     return std::max({double(box.hi[0]) - double(box.lo[0]), double(box.hi[1]) - double(box.lo[1]),
                      double(box.hi[2]) - double(box.lo[2])});

@@ -196,6 +196,7 @@ void UniformGrid::Level::scan(const Aabb& query, std::uint32_t lowest_index, Vis
   // The cells x0..x1 of one (y, z) row are consecutive, and so are their entries: one run.
   // The runs' entries bound the hits; the scan (SIMD, grid_scan.cpp) writes them to a buffer
   // of the calling thread's own, grown to the largest query it has seen.
+  if (x0 > x1 || y0 > y1 || z0 > z1) return;  // a query box with lo above hi meets nothing
   std::size_t most = 0;
   for (std::int64_t cz = z0; cz <= z1; ++cz)
     for (std::int64_t cy = y0; cy <= y1; ++cy) {

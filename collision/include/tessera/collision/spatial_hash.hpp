@@ -115,7 +115,9 @@ class UniformGrid {
   /// How many boxes went to the level of large boxes.
   std::size_t large_box_count() const { return levels_[1].count; }
 
-  /// Calls visit(i) once for every built box i overlapping `query`, in no fixed order.
+  /// Calls visit(i) once for every built box i overlapping `query`, in no fixed order. The
+  /// hits wait in a buffer of the calling thread's own: `visit` must not query a grid itself
+  /// nor enter TBB (which could run another query on this thread meanwhile).
   template <class Visit>
   void for_each_overlap(const Aabb& query, Visit&& visit) const {
     for (const Level& level : levels_) level.scan(query, 0, visit);

@@ -40,21 +40,28 @@ inline Real squared_point_triangle_distance(const Vector3r& p, const Vector3r& a
   return (p - closest_point_on_triangle(p, a, b, c)).squaredNorm();
 }
 
+/// u·v summed as x + (y + z), written out: the batched segment distances
+/// (segment_distances.cpp) sum in this order to give these bits. (Eigen's dot() sums a float
+/// 3-vector so, but pairs a double one's lanes.)
+inline Real dot3(const Vector3r& u, const Vector3r& v) {
+  return u.x() * v.x() + (u.y() * v.y() + u.z() * v.z());
+}
+
 inline Real squared_segment_distance(const Vector3r& p1, const Vector3r& q1, const Vector3r& p2,
                                      const Vector3r& q2) {
   const Vector3r d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
-  const Real a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  const Real a = dot3(d1, d1), e = dot3(d2, d2), f = dot3(d2, r);
   const Real tiny = kDegenerateTolerance * kDegenerateTolerance;
   Real s = 0, t = 0;
-  if (a <= tiny && e <= tiny) return r.squaredNorm();
+  if (a <= tiny && e <= tiny) return dot3(r, r);
   if (a <= tiny) {
     t = std::clamp(f / e, Real(0), Real(1));
   } else {
-    const Real c = d1.dot(r);
+    const Real c = dot3(d1, r);
     if (e <= tiny) {
       s = std::clamp(-c / a, Real(0), Real(1));
     } else {
-      const Real b = d1.dot(d2), denominator = a * e - b * b;
+      const Real b = dot3(d1, d2), denominator = a * e - b * b;
       // Parallel segments (denominator 0): any s works, take 0.
       s = denominator > 0 ? std::clamp((b * f - c * e) / denominator, Real(0), Real(1)) : 0;
       t = (b * s + f) / e;
@@ -67,7 +74,8 @@ inline Real squared_segment_distance(const Vector3r& p1, const Vector3r& q1, con
       }
     }
   }
-  return (p1 + s * d1 - (p2 + t * d2)).squaredNorm();
+  const Vector3r gap = p1 + s * d1 - (p2 + t * d2);
+  return dot3(gap, gap);
 }
 
 }  // namespace tessera::detail

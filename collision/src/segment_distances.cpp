@@ -10,8 +10,8 @@
 //   (e ≈ 0: t = 0, s = clamp(−c / a))
 //   distance² = |p1 + s d1 − p2 − t d2|²
 //
-// Each lane computes the scalar function's operations in its order (Eigen's x + (y + z) for
-// dot products, true divisions), and the module is compiled without floating-point
+// Each lane computes the scalar function's operations in its order (dot products summed
+// x + (y + z), detail::dot3; true divisions), and the module is compiled without floating-point
 // contraction (no fused multiply–add on one side and not the other): the same bits as
 // squared_segment_distance on every target, so a batch finds exactly the scalar rule's
 // candidates (tests/collision/test_self_collision.cpp checks it on every target the machine
@@ -40,7 +40,7 @@ void SquaredSegmentDistances(const Vector3r& p1, const Vector3r& q1,
   const auto p1x = hn::Set(d, p1.x()), p1y = hn::Set(d, p1.y()), p1z = hn::Set(d, p1.z());
   const Vector3r d1s = q1 - p1;
   const auto d1x = hn::Set(d, d1s.x()), d1y = hn::Set(d, d1s.y()), d1z = hn::Set(d, d1s.z());
-  const auto a = hn::Set(d, d1s.squaredNorm());
+  const auto a = hn::Set(d, detail::dot3(d1s, d1s));
   const auto clamp01 = [&](auto v) { return hn::Min(hn::Max(v, zero), one); };
   // Eigen's order for a 3-vector's dot product and squared norm: x + (y + z).
   const auto dot = [](auto ax, auto ay, auto az, auto bx, auto by, auto bz) {

@@ -107,6 +107,11 @@ struct Particles {
       if (p.inverse_mass[i] != 0) return false;
     return true;
   }
+  /// Whether edges (p0, p1) and (p2, p3) can be an edge–edge contact: no shared vertex, not
+  /// all four static.
+  bool may_touch(std::uint32_t p0, std::uint32_t p1, std::uint32_t p2, std::uint32_t p3) const {
+    return p0 != p2 && p0 != p3 && p1 != p2 && p1 != p3 && !all_static({p0, p1, p2, p3});
+  }
 };
 
 /// Whether the point sets a and b are farther apart than `within` along some axis: then no
@@ -299,8 +304,7 @@ void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Re
   const Particles particles{positions};
   const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
   const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
-  if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3) return;
-  if (particles.all_static({p0, p1, p2, p3})) return;
+  if (!particles.may_touch(p0, p1, p2, p3)) return;
   const Real within = reach + std::max(budget_[p0], budget_[p1]) + std::max(budget_[p2], budget_[p3]);
   const Real squared =
       detail::squared_segment_distance(anchor_[p0], anchor_[p1], anchor_[p2], anchor_[p3]);
@@ -397,8 +401,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
         const Particles particles{positions};
         edge_grid_.for_each_overlap_above(edge_boxes_[e], e, [&](std::uint32_t f) {
           const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
-          if (p0 == p2 || p0 == p3 || p1 == p2 || p1 == p3) return;
-          if (particles.all_static({p0, p1, p2, p3})) return;
+          if (!particles.may_touch(p0, p1, p2, p3)) return;
           batch.add(f, anchor_[p2], anchor_[p3], std::max(budget_[p2], budget_[p3]));
         });
         if (batch.count() != 0) {

@@ -13,8 +13,8 @@
 //              fewer threads than shares, e.g. more threads asked for than the machine has)
 //
 // Waiting: spin (the other threads arrive within microseconds), then run what nobody has
-// claimed, then sleep on the phase's count (a futex, std::atomic::wait) until a share
-// finishes. The sleep is for a busy machine: a thread the OS has descheduled in the middle of
+// claimed, then sleep on the phase's count (a futex, std::atomic::wait) until the phase
+// is done. The sleep is for a busy machine: a thread the OS has descheduled in the middle of
 // its share holds the phase for a whole time slice, and a waiter that kept spinning or
 // yielding took the core it needed. Measured in docs/performance.md, "The phase region on a
 // busy machine". (The spins are counted in pauses, whose length varies by CPU, about 10 to 150
@@ -45,8 +45,8 @@ namespace tessera::detail {
 /// (a pause is some 10 to 150 cycles), well past the microseconds threads that run take to
 /// arrive, short against a thread that never comes.
 inline constexpr std::uint32_t kHelpAfterSpins = 2048;
-/// Pauses before a waiting thread, having run what nobody claimed, sleeps until a share of
-/// the phase finishes: the share it waits for is running, or its thread has been
+/// Pauses before a waiting thread, having run what nobody claimed, sleeps until the phase is
+/// done: the share it waits for is running, or its thread has been
 /// descheduled. Long enough that a waiter on an idle machine rarely sleeps (a wake-up costs
 /// the finishing thread a futex call and the waiter tens of microseconds).
 inline constexpr std::uint32_t kSleepAfterSpins = 4 * kHelpAfterSpins;
@@ -146,7 +146,7 @@ class PhaseRegion {
   }
 
   /// Until every share of `phase` is done: spins; after kHelpAfterSpins runs the unclaimed
-  /// ones; after kSleepAfterSpins sleeps until a share finishes. Whether it ran a share.
+  /// ones; after kSleepAfterSpins sleeps until the phase is done. Whether it ran a share.
   template <class RunShare>
   bool wait_for(std::size_t phase, RunShare& run_share) {
     std::uint32_t spins = 0;

@@ -196,18 +196,11 @@ void UniformGrid::Level::scan(const Aabb& query, std::uint32_t lowest_index, Vis
   const std::int64_t z0 = cell_coordinate(query.lo[2] - largest_extent[2] - rounding, 2),
                      z1 = cell_coordinate(query.hi[2], 2);
   // The cells x0..x1 of one (y, z) row are consecutive, and so are their entries: one run.
-  // The runs' entries bound the hits; the scan (SIMD, grid_scan.cpp) writes them to a buffer
-  // of the calling thread's own, grown to the largest query it has seen.
+  // The scan (SIMD, grid_scan.cpp) writes the hits to a buffer of the calling thread's own,
+  // with room for every entry of the level.
   if (x0 > x1 || y0 > y1 || z0 > z1) return;  // a query box with lo above hi meets nothing
-  std::size_t most = 0;
-  for (std::int64_t cz = z0; cz <= z1; ++cz)
-    for (std::int64_t cy = y0; cy <= y1; ++cy) {
-      const std::size_t row = std::size_t((cz * dims[1] + cy) * dims[0]);
-      most += cell_start[row + std::size_t(x1) + 1] - cell_start[row + std::size_t(x0)];
-    }
-  if (most == 0) return;
   thread_local std::vector<std::uint32_t> hits;
-  if (hits.size() < most) hits.resize(most);
+  if (hits.size() < count) hits.resize(count);
   const detail::GridLevelView view{{entry_lo[0].data(), entry_lo[1].data(), entry_lo[2].data()},
                                    {entry_hi[0].data(), entry_hi[1].data(), entry_hi[2].data()},
                                    entry_index.data(),

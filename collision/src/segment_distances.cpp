@@ -30,54 +30,91 @@ namespace tessera {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-void SquaredSegmentDistances(const Vector3r& p1, const Vector3r& q1,
-                             const detail::SegmentBatch& batch, Real* out) {
+/// The squared distances from segment (p1, p1 + d1) to the batch's segments i .. i + lanes.
+template <class D, class V>
+HWY_INLINE V SquaredDistancesAt(D d, const detail::SegmentBatch& batch, std::size_t i, V p1x,
+                                V p1y, V p1z, V d1x, V d1y, V d1z, V a) {
+  const auto zero = hn::Zero(d), one = hn::Set(d, Real(1));
+  const auto tiny = hn::Set(d, kDegenerateTolerance * kDegenerateTolerance);
+  const auto clamp01 = [&](V v) { return hn::Min(hn::Max(v, zero), one); };
+  // Eigen's order for a 3-vector's dot product and squared norm: x + (y + z).
+  const auto dot = [](V ax, V ay, V az, V bx, V by, V bz) {
+    return hn::Add(hn::Mul(ax, bx), hn::Add(hn::Mul(ay, by), hn::Mul(az, bz)));
+  };
+  const auto p2x = hn::LoadU(d, batch.px + i), p2y = hn::LoadU(d, batch.py + i),
+             p2z = hn::LoadU(d, batch.pz + i);
+  const auto d2x = hn::Sub(hn::LoadU(d, batch.qx + i), p2x),
+             d2y = hn::Sub(hn::LoadU(d, batch.qy + i), p2y),
+             d2z = hn::Sub(hn::LoadU(d, batch.qz + i), p2z);
+  const auto rx = hn::Sub(p1x, p2x), ry = hn::Sub(p1y, p2y), rz = hn::Sub(p1z, p2z);
+  const auto e = dot(d2x, d2y, d2z, d2x, d2y, d2z);
+  const auto f = dot(d2x, d2y, d2z, rx, ry, rz);
+  const auto c = dot(d1x, d1y, d1z, rx, ry, rz);
+  const auto b = dot(d1x, d1y, d1z, d2x, d2y, d2z);
+  const auto denominator = hn::Sub(hn::Mul(a, e), hn::Mul(b, b));
+  // The lanes that do not take a branch compute it anyway (a 0/0 there is discarded).
+  const auto s_free = hn::IfThenElseZero(
+      hn::Gt(denominator, zero),
+      clamp01(hn::Div(hn::Sub(hn::Mul(b, f), hn::Mul(c, e)), denominator)));
+  const auto t_free = hn::Div(hn::Add(hn::Mul(b, s_free), f), e);
+  const auto s_at_0 = clamp01(hn::Div(hn::Neg(c), a));
+  const auto s_at_1 = clamp01(hn::Div(hn::Sub(b, c), a));
+  const auto below = hn::Lt(t_free, zero), above = hn::Gt(t_free, one);
+  auto s = hn::IfThenElse(below, s_at_0, hn::IfThenElse(above, s_at_1, s_free));
+  auto t = hn::IfThenElse(below, zero, hn::IfThenElse(above, one, t_free));
+  // A point-like second segment: the first's point nearest p2.
+  const auto point_like = hn::Le(e, tiny);
+  s = hn::IfThenElse(point_like, s_at_0, s);
+  t = hn::IfThenElseZero(hn::Not(point_like), t);
+  // (p1 + s d1) − (p2 + t d2), as the scalar rule writes it.
+  const auto gx = hn::Sub(hn::Add(p1x, hn::Mul(s, d1x)), hn::Add(p2x, hn::Mul(t, d2x)));
+  const auto gy = hn::Sub(hn::Add(p1y, hn::Mul(s, d1y)), hn::Add(p2y, hn::Mul(t, d2y)));
+  const auto gz = hn::Sub(hn::Add(p1z, hn::Mul(s, d1z)), hn::Add(p2z, hn::Mul(t, d2z)));
+  return dot(gx, gy, gz, gx, gy, gz);
+}
+
+/// Runs `each(i, squared)` on every vector of the batch: the first segment's lanes set once.
+template <class Each>
+HWY_INLINE void ForEachVector(const Vector3r& p1, const Vector3r& q1,
+                              const detail::SegmentBatch& batch, Each&& each) {
   // At most kSegmentBatchLanes lanes: the callers pad to that.
   const hn::CappedTag<Real, detail::kSegmentBatchLanes> d;
   const std::size_t lanes = hn::Lanes(d);
-  const auto zero = hn::Zero(d), one = hn::Set(d, Real(1));
-  const auto tiny = hn::Set(d, kDegenerateTolerance * kDegenerateTolerance);
   const auto p1x = hn::Set(d, p1.x()), p1y = hn::Set(d, p1.y()), p1z = hn::Set(d, p1.z());
   const Vector3r d1s = q1 - p1;
   const auto d1x = hn::Set(d, d1s.x()), d1y = hn::Set(d, d1s.y()), d1z = hn::Set(d, d1s.z());
   const auto a = hn::Set(d, detail::dot3(d1s, d1s));
-  const auto clamp01 = [&](auto v) { return hn::Min(hn::Max(v, zero), one); };
-  // Eigen's order for a 3-vector's dot product and squared norm: x + (y + z).
-  const auto dot = [](auto ax, auto ay, auto az, auto bx, auto by, auto bz) {
-    return hn::Add(hn::Mul(ax, bx), hn::Add(hn::Mul(ay, by), hn::Mul(az, bz)));
-  };
-  for (std::size_t i = 0; i < batch.count; i += lanes) {
-    const auto p2x = hn::LoadU(d, batch.px + i), p2y = hn::LoadU(d, batch.py + i),
-               p2z = hn::LoadU(d, batch.pz + i);
-    const auto d2x = hn::Sub(hn::LoadU(d, batch.qx + i), p2x),
-               d2y = hn::Sub(hn::LoadU(d, batch.qy + i), p2y),
-               d2z = hn::Sub(hn::LoadU(d, batch.qz + i), p2z);
-    const auto rx = hn::Sub(p1x, p2x), ry = hn::Sub(p1y, p2y), rz = hn::Sub(p1z, p2z);
-    const auto e = dot(d2x, d2y, d2z, d2x, d2y, d2z);
-    const auto f = dot(d2x, d2y, d2z, rx, ry, rz);
-    const auto c = dot(d1x, d1y, d1z, rx, ry, rz);
-    const auto b = dot(d1x, d1y, d1z, d2x, d2y, d2z);
-    const auto denominator = hn::Sub(hn::Mul(a, e), hn::Mul(b, b));
-    // The lanes that do not take a branch compute it anyway (a 0/0 there is discarded).
-    const auto s_free = hn::IfThenElseZero(
-        hn::Gt(denominator, zero),
-        clamp01(hn::Div(hn::Sub(hn::Mul(b, f), hn::Mul(c, e)), denominator)));
-    const auto t_free = hn::Div(hn::Add(hn::Mul(b, s_free), f), e);
-    const auto s_at_0 = clamp01(hn::Div(hn::Neg(c), a));
-    const auto s_at_1 = clamp01(hn::Div(hn::Sub(b, c), a));
-    const auto below = hn::Lt(t_free, zero), above = hn::Gt(t_free, one);
-    auto s = hn::IfThenElse(below, s_at_0, hn::IfThenElse(above, s_at_1, s_free));
-    auto t = hn::IfThenElse(below, zero, hn::IfThenElse(above, one, t_free));
-    // A point-like second segment: the first's point nearest p2.
-    const auto point_like = hn::Le(e, tiny);
-    s = hn::IfThenElse(point_like, s_at_0, s);
-    t = hn::IfThenElseZero(hn::Not(point_like), t);
-    // (p1 + s d1) − (p2 + t d2), as the scalar rule writes it.
-    const auto gx = hn::Sub(hn::Add(p1x, hn::Mul(s, d1x)), hn::Add(p2x, hn::Mul(t, d2x)));
-    const auto gy = hn::Sub(hn::Add(p1y, hn::Mul(s, d1y)), hn::Add(p2y, hn::Mul(t, d2y)));
-    const auto gz = hn::Sub(hn::Add(p1z, hn::Mul(s, d1z)), hn::Add(p2z, hn::Mul(t, d2z)));
-    hn::StoreU(dot(gx, gy, gz, gx, gy, gz), d, out + i);
-  }
+  for (std::size_t i = 0; i < batch.count; i += lanes)
+    each(d, i, SquaredDistancesAt(d, batch, i, p1x, p1y, p1z, d1x, d1y, d1z, a));
+}
+
+void SquaredSegmentDistances(const Vector3r& p1, const Vector3r& q1,
+                             const detail::SegmentBatch& batch, Real* out) {
+  ForEachVector(p1, q1, batch,
+                [&](auto d, std::size_t i, auto squared) { hn::StoreU(squared, d, out + i); });
+}
+
+std::size_t SegmentsWithin(const Vector3r& p1, const Vector3r& q1, Real own,
+                           const detail::SegmentBatch& batch, const Real* budget, Real* squared,
+                           std::uint32_t* within) {
+  std::size_t found = 0;
+  ForEachVector(p1, q1, batch, [&](auto d, std::size_t i, auto distance) {
+    hn::StoreU(distance, d, squared + i);
+    // within = own + budget, compared as within · within (add_edge_edge_candidate's order).
+    const auto reach = hn::Add(hn::Set(d, own), hn::LoadU(d, budget + i));
+    std::uint8_t bytes[8] = {};
+    hn::StoreMaskBits(d, hn::Lt(distance, hn::Mul(reach, reach)), bytes);
+    std::uint64_t bits = 0;
+    for (int k = 0; k < 8; ++k) bits |= std::uint64_t(bytes[k]) << (8 * k);
+    // The lanes past count are padding (their bits dropped); no branch per lane.
+    while (bits != 0) {
+      const std::size_t k = i + std::size_t(__builtin_ctzll(bits));
+      bits &= bits - 1;
+      within[found] = std::uint32_t(k);
+      found += k < batch.count;
+    }
+  });
+  return found;
 }
 
 }  // namespace HWY_NAMESPACE
@@ -88,10 +125,17 @@ HWY_AFTER_NAMESPACE();
 namespace tessera::detail {
 
 HWY_EXPORT(SquaredSegmentDistances);
+HWY_EXPORT(SegmentsWithin);
 
 void squared_segment_distances(const Vector3r& p1, const Vector3r& q1, const SegmentBatch& batch,
                                Real* out) {
   HWY_DYNAMIC_DISPATCH(SquaredSegmentDistances)(p1, q1, batch, out);
+}
+
+std::size_t segments_within(const Vector3r& p1, const Vector3r& q1, Real own,
+                            const SegmentBatch& batch, const Real* budget, Real* squared,
+                            std::uint32_t* within) {
+  return HWY_DYNAMIC_DISPATCH(SegmentsWithin)(p1, q1, own, batch, budget, squared, within);
 }
 
 }  // namespace tessera::detail

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 #include <tessera/core/real.hpp>
 
@@ -23,5 +24,14 @@ inline constexpr std::size_t kSegmentBatchLanes = 16;
 /// caller measures a point-like first segment with squared_segment_distance).
 void squared_segment_distances(const Vector3r& p1, const Vector3r& q1, const SegmentBatch& batch,
                                Real* out);
+
+/// The batch's segments k (below count) with squared distance to (p1, q1) below
+/// (own + budget[k])²: their positions k written to `within` in increasing order, their count
+/// returned; `squared` gets every distance as squared_segment_distances writes them. The
+/// comparison is the scalar one (within = own + budget, squared < within · within), so the
+/// same segments pass on every target. budget, squared and within have the padded room.
+std::size_t segments_within(const Vector3r& p1, const Vector3r& q1, Real own,
+                            const SegmentBatch& batch, const Real* budget, Real* squared,
+                            std::uint32_t* within);
 
 }  // namespace tessera::detail

@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <string>
 
 #include <tbb/blocked_range.h>
@@ -143,31 +144,35 @@ Real relative_motion(const Vector3r* motion, const std::uint32_t (&a)[N],
 /// The edges one edge's query met, their anchors by coordinate and the larger budget of
 /// each, for the batched segment distances; one per thread, kept (allocation-free once grown).
 struct EdgeBatch {
-  std::vector<std::uint32_t> edges;
+  std::vector<std::uint32_t> edges, within;
   std::vector<Real> px, py, pz, qx, qy, qz, budget, squared;
 
   std::size_t count() const { return edges.size(); }
-  void clear() {
-    edges.clear();
-    for (std::vector<Real>* v : {&px, &py, &pz, &qx, &qy, &qz, &budget}) v->clear();
-  }
-  void add(std::uint32_t edge, const Vector3r& p, const Vector3r& q, Real larger_budget) {
-    edges.push_back(edge);
-    px.push_back(p.x()), py.push_back(p.y()), pz.push_back(p.z());
-    qx.push_back(q.x()), qy.push_back(q.y()), qz.push_back(q.z());
-    budget.push_back(larger_budget);
-  }
-  /// Squared distances from segment (p, q) to each edge of the batch.
-  const Real* measure(const Vector3r& p, const Vector3r& q) {
+  /// Sizes the arrays to the edges met (padded to the lanes) and fills them from `anchors`.
+  template <class Anchors>
+  void gather(const Anchors* anchors) {
     const std::size_t n = count();
     const std::size_t padded =
         (n + detail::kSegmentBatchLanes - 1) / detail::kSegmentBatchLanes * detail::kSegmentBatchLanes;
-    for (std::vector<Real>* v : {&px, &py, &pz, &qx, &qy, &qz}) v->resize(padded, Real(0));
-    squared.resize(padded);
-    detail::squared_segment_distances(
-        p, q, {px.data(), py.data(), pz.data(), qx.data(), qy.data(), qz.data(), n},
-        squared.data());
-    return squared.data();
+    for (std::vector<Real>* v : {&px, &py, &pz, &qx, &qy, &qz, &budget, &squared})
+      if (v->size() < padded) v->resize(padded);
+    if (within.size() < padded) within.resize(padded);
+    for (std::size_t k = 0; k < n; ++k) {
+      const Anchors& edge = anchors[edges[k]];
+      px[k] = edge.p[0], py[k] = edge.p[1], pz[k] = edge.p[2];
+      qx[k] = edge.q[0], qy[k] = edge.q[1], qz[k] = edge.q[2];
+      budget[k] = edge.budget;
+    }
+    // The padding lanes: a point at the origin, measured and dropped.
+    for (std::size_t k = n; k < padded; ++k)
+      px[k] = py[k] = pz[k] = qx[k] = qy[k] = qz[k] = budget[k] = 0;
+  }
+  /// The edges within own + their budget of segment (p, q), as positions in the batch.
+  std::span<const std::uint32_t> measure(const Vector3r& p, const Vector3r& q, Real own) {
+    const std::size_t found = detail::segments_within(
+        p, q, own, {px.data(), py.data(), pz.data(), qx.data(), qy.data(), qz.data(), count()},
+        budget.data(), squared.data(), within.data());
+    return {within.data(), found};
   }
 };
 
@@ -312,6 +317,42 @@ void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Re
     out.push_back({std::min(e, f), std::max(e, f), std::sqrt(squared)});
 }
 
+void SelfCollision::set_edge_anchors(std::uint32_t e) {
+  const std::uint32_t p = edges_[2 * e], q = edges_[2 * e + 1];
+  edge_anchors_[e] = {{anchor_[p].x(), anchor_[p].y(), anchor_[p].z()},
+                      {anchor_[q].x(), anchor_[q].y(), anchor_[q].z()},
+                      std::max(budget_[p], budget_[q]),
+                      0};
+}
+
+template <class Collect>
+void SelfCollision::add_edge_edge_candidates(std::uint32_t e, Real reach,
+                                             const SelfCollisionPositions& positions,
+                                             std::vector<Candidate>& out,
+                                             Collect&& collect) const {
+  const Particles particles{positions};
+  const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
+  EdgeBatch& batch = edge_batch();
+  batch.edges.clear();
+  collect([&](std::uint32_t f) { batch.edges.push_back(f); });
+  if (batch.count() == 0) return;
+  const Real tiny = kDegenerateTolerance * kDegenerateTolerance;
+  if ((anchor_[p1] - anchor_[p0]).squaredNorm() <= tiny) {
+    // A point-like edge: the scalar rule, which handles it.
+    for (const std::uint32_t f : batch.edges) add_edge_edge_candidate(e, f, reach, positions, out);
+    return;
+  }
+  // The distance test first (a vector at a time, no branch per edge met), then the topology
+  // of the few within it: the same candidates as add_edge_edge_candidate, in the same order.
+  batch.gather(edge_anchors_.data());
+  const Real own = reach + std::max(budget_[p0], budget_[p1]);
+  for (const std::uint32_t k : batch.measure(anchor_[p0], anchor_[p1], own)) {
+    const std::uint32_t f = batch.edges[k];
+    if (particles.may_touch(p0, p1, edges_[2 * f], edges_[2 * f + 1]))
+      out.push_back({std::min(e, f), std::max(e, f), std::sqrt(batch.squared[k])});
+  }
+}
+
 Aabb SelfCollision::vertex_box(std::uint32_t p, Real reach) const {
   const std::uint32_t ids[1] = {p};
   return anchor_box(ids, anchor_.data(), budget_.data(), reach);
@@ -368,6 +409,8 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   parallel_over(triangle_count,
                 [&](std::size_t t) { triangle_boxes_[t] = triangle_box(std::uint32_t(t)); });
   const std::size_t edge_queries = settings.edge_edge ? edge_count : 0;
+  edge_anchors_.resize(edge_queries);
+  parallel_over(edge_queries, [&](std::size_t e) { set_edge_anchors(std::uint32_t(e)); });
   edge_boxes_.resize(edge_queries);
   parallel_over(edge_queries,
                 [&](std::size_t e) { edge_boxes_[e] = edge_box(std::uint32_t(e), reach); });
@@ -394,32 +437,10 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
       edge_queries,
       [&](std::size_t edge, std::vector<Candidate>& buffer) {
         const std::uint32_t e = std::uint32_t(edge);
-        const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
         const std::size_t first = buffer.size();
-        EdgeBatch& batch = edge_batch();
-        batch.clear();
-        const Particles particles{positions};
-        edge_grid_.for_each_overlap_above(edge_boxes_[e], e, [&](std::uint32_t f) {
-          const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
-          if (!particles.may_touch(p0, p1, p2, p3)) return;
-          batch.add(f, anchor_[p2], anchor_[p3], std::max(budget_[p2], budget_[p3]));
+        add_edge_edge_candidates(e, reach, positions, buffer, [&](auto&& visit) {
+          edge_grid_.for_each_overlap_above(edge_boxes_[e], e, visit);
         });
-        if (batch.count() != 0) {
-          const Real tiny = kDegenerateTolerance * kDegenerateTolerance;
-          if ((anchor_[p1] - anchor_[p0]).squaredNorm() <= tiny) {
-            // A point-like edge: the scalar rule, which handles it.
-            for (const std::uint32_t f : batch.edges)
-              add_edge_edge_candidate(e, f, reach, positions, buffer);
-          } else {
-            const Real* squared = batch.measure(anchor_[p0], anchor_[p1]);
-            const Real own = reach + std::max(budget_[p0], budget_[p1]);
-            for (std::size_t k = 0; k < batch.count(); ++k) {
-              const Real within = own + batch.budget[k];  // as add_edge_edge_candidate
-              if (squared[k] < within * within)
-                buffer.push_back({e, batch.edges[k], std::sqrt(squared[k])});
-            }
-          }
-        }
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
                   [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
       },
@@ -536,6 +557,8 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
     largest = std::max(largest, anchor_[i].cwiseAbs().maxCoeff());
   }
   departure_allowance_ = std::max(departure_allowance_, kAllowancePerCoordinate * largest);
+  if (settings.edge_edge)
+    for (const std::uint32_t e : new_edges_) set_edge_anchors(e);
   for (const std::uint32_t t : new_triangles_)
     if (!reboxed_triangle_[t]) reboxed_triangle_[t] = 1, reboxed_triangles_.push_back(t);
   for (const std::uint32_t e : new_edges_)
@@ -612,16 +635,15 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
         [&](std::size_t k, std::vector<Candidate>& buffer) {
           const std::uint32_t e = new_edges_[k];
           const Aabb box = edge_box(e, reach);
-          const auto add = [&](std::uint32_t f) {
-            add_edge_edge_candidate(e, f, reach, positions, buffer);
-          };
-          edge_grid_.for_each_overlap(box, [&](std::uint32_t f) {
-            if (!reboxed_edge_[f]) add(f);
-          });
-          reboxed_edge_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
-            const std::uint32_t f = reboxed_edges_[entry];
-            // A pair of two new edges is found from both: kept from the lower.
-            if (f != e && !(new_edge_[f] && f < e)) add(f);
+          add_edge_edge_candidates(e, reach, positions, buffer, [&](auto&& visit) {
+            edge_grid_.for_each_overlap(box, [&](std::uint32_t f) {
+              if (!reboxed_edge_[f]) visit(f);
+            });
+            reboxed_edge_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
+              const std::uint32_t f = reboxed_edges_[entry];
+              // A pair of two new edges is found from both: kept from the lower.
+              if (f != e && !(new_edge_[f] && f < e)) visit(f);
+            });
           });
         },
         found_edge_edge_);

@@ -292,7 +292,7 @@ TEST(SelfCollision, BatchedSegmentDistancesAreTheScalarOnesBitForBitOnEveryTarge
                    Vector3r(0.590032995f, -0.611597002f, -0.501026332f),
                    {Vector3r(-0.349473983f, -0.391988546f, -0.233585238f)},
                    {Vector3r(0.598803699f, -0.562844515f, -0.501125336f)}});
-  std::size_t compared = 0;
+  std::size_t compared = 0, within_tested = 0, within_found = 0;
   for (const std::string& target : available_simd_targets()) {
     force_simd_target(target);
     for (const Case& c : cases) {
@@ -315,10 +315,36 @@ TEST(SelfCollision, BatchedSegmentDistancesAreTheScalarOnesBitForBitOnEveryTarge
             << expected;
         ++compared;
       }
+      // segments_within: the pairs closer than own + budget[j], by the scalar comparison
+      // (within = own + budget, squared < within²), in order; budgets around each pair's own
+      // distance, some exactly at it.
+      const Real own = Real(0.05);
+      std::vector<Real> budget(padded, Real(0)), within_squared(padded);
+      std::vector<std::uint32_t> within(padded);
+      std::vector<std::uint32_t> expected_within;
+      for (std::size_t j = 0; j < n; ++j) {
+        const Real distance = std::sqrt(squared[j]);
+        budget[j] = std::max(Real(0), distance - own + Real(j % 3) * Real(0.01) - Real(0.01));
+        const Real reach = own + budget[j];
+        if (squared[j] < reach * reach) expected_within.push_back(std::uint32_t(j));
+      }
+      const std::size_t found = detail::segments_within(
+          c.p1, c.q1, own,
+          {px.data(), py.data(), pz.data(), qx.data(), qy.data(), qz.data(), n}, budget.data(),
+          within_squared.data(), within.data());
+      EXPECT_EQ(std::vector<std::uint32_t>(within.begin(), within.begin() + std::ptrdiff_t(found)),
+                expected_within)
+          << target;
+      EXPECT_EQ(std::memcmp(within_squared.data(), squared.data(), n * sizeof(Real)), 0) << target;
+      within_tested += n;
+      within_found += found;
     }
   }
   force_simd_target("");
   EXPECT_GT(compared, 1000u);
+  // Both answers occur.
+  EXPECT_GT(within_found, within_tested / 5);
+  EXPECT_LT(within_found, 4 * within_tested / 5);
 }
 
 TEST(SelfCollision, AFoldedClothHasExactlyTheBruteForceContacts) {

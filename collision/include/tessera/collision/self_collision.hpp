@@ -263,6 +263,14 @@ class SelfCollision {
   void add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real reach,
                                const SelfCollisionPositions& positions,
                                std::vector<Candidate>& out) const;
+  /// The same for every edge f that collect(visit) visits, their distances a vector at a
+  /// time (segment_distances.cpp), in the order visited. Reads edge_anchors_.
+  template <class Collect>
+  void add_edge_edge_candidates(std::uint32_t e, Real reach,
+                                const SelfCollisionPositions& positions,
+                                std::vector<Candidate>& out, Collect&& collect) const;
+  /// Edge e's record in edge_anchors_, from its particles' anchors and budgets.
+  void set_edge_anchors(std::uint32_t e);
   /// Every particle's departure from its room under `frame`, into departure_, and the
   /// rounding allowance of the filter's bound; with `outran_list`, also the particles that
   /// left their room (ascending), from the same squared lengths.
@@ -317,6 +325,12 @@ class SelfCollision {
   static constexpr Real kAllowancePerCoordinate = Real(1e-5);
   std::size_t measured_candidates_ = 0;
   std::vector<Aabb> vertex_boxes_, triangle_boxes_, edge_boxes_;
+  /// Each edge's anchors and larger budget, as the build's edge–edge queries read them (one
+  /// record, half a cache line in float, per edge met).
+  struct alignas(8 * sizeof(Real)) EdgeAnchors {
+    Real p[3], q[3], budget, unused;
+  };
+  std::vector<EdgeAnchors> edge_anchors_;
   UniformGrid triangle_grid_, edge_grid_;
   std::vector<Pair> triangle_point_pairs_, edge_edge_pairs_;
   // The last detection's candidates, which refine() filters.

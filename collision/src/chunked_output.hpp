@@ -24,6 +24,17 @@ class ChunkedOutput {
   /// the buffers in chunk order to `out` (overwritten).
   template <class Produce>
   void run(std::size_t count, Produce&& produce, std::vector<T>& out) {
+    run_chunks(
+        count,
+        [&](std::size_t begin, std::size_t end, std::vector<T>& buffer) {
+          for (std::size_t item = begin; item < end; ++item) produce(item, buffer);
+        },
+        out);
+  }
+  /// The same with produce(begin, end, buffer) called once per chunk [begin, end): for a
+  /// body that works on a chunk's items together (a vector at a time).
+  template <class ProduceChunk>
+  void run_chunks(std::size_t count, ProduceChunk&& produce, std::vector<T>& out) {
     const std::size_t chunks = (count + kCollisionChunk - 1) / kCollisionChunk;
     if (buffers_.size() < chunks) buffers_.resize(chunks);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1),
@@ -31,9 +42,8 @@ class ChunkedOutput {
                         for (std::size_t c = range.begin(); c != range.end(); ++c) {
                           std::vector<T>& buffer = buffers_[c];
                           buffer.clear();
-                          const std::size_t end = std::min(count, (c + 1) * kCollisionChunk);
-                          for (std::size_t item = c * kCollisionChunk; item < end; ++item)
-                            produce(item, buffer);
+                          produce(c * kCollisionChunk, std::min(count, (c + 1) * kCollisionChunk),
+                                  buffer);
                         }
                       });
     std::size_t total = 0;

@@ -73,6 +73,25 @@ HWY_INLINE V SquaredDistancesAt(D d, const detail::SegmentBatch& batch, std::siz
   return dot(gx, gy, gz, gx, gy, gz);
 }
 
+/// Appends to `passing` (from position `found`) the positions i + k of the true lanes k of
+/// `mask` below `count` (past it: padding, dropped), in order, without a branch per lane;
+/// returns the new count. `passing` has room to i + lanes.
+template <class D, class M>
+HWY_INLINE std::size_t AppendPassing(D d, M mask, std::size_t i, std::size_t count,
+                                     std::uint32_t* passing, std::size_t found) {
+  std::uint8_t bytes[8] = {};
+  hn::StoreMaskBits(d, mask, bytes);
+  std::uint64_t bits = 0;
+  for (int k = 0; k < 8; ++k) bits |= std::uint64_t(bytes[k]) << (8 * k);
+  while (bits != 0) {
+    const std::size_t k = i + std::size_t(__builtin_ctzll(bits));
+    bits &= bits - 1;
+    passing[found] = std::uint32_t(k);
+    found += k < count;
+  }
+  return found;
+}
+
 /// Runs `each(i, squared)` on every vector of the batch: the first segment's lanes set once.
 template <class Each>
 HWY_INLINE void ForEachVector(const Vector3r& p1, const Vector3r& q1,
@@ -102,18 +121,32 @@ std::size_t SegmentsWithin(const Vector3r& p1, const Vector3r& q1, Real own,
     hn::StoreU(distance, d, squared + i);
     // within = own + budget, compared as within · within (add_edge_edge_candidate's order).
     const auto reach = hn::Add(hn::Set(d, own), hn::LoadU(d, budget + i));
-    std::uint8_t bytes[8] = {};
-    hn::StoreMaskBits(d, hn::Lt(distance, hn::Mul(reach, reach)), bytes);
-    std::uint64_t bits = 0;
-    for (int k = 0; k < 8; ++k) bits |= std::uint64_t(bytes[k]) << (8 * k);
-    // The lanes past count are padding (their bits dropped); no branch per lane.
-    while (bits != 0) {
-      const std::size_t k = i + std::size_t(__builtin_ctzll(bits));
-      bits &= bits - 1;
-      within[found] = std::uint32_t(k);
-      found += k < batch.count;
-    }
+    found = AppendPassing(d, hn::Lt(distance, hn::Mul(reach, reach)), i, batch.count, within,
+                          found);
   });
+  return found;
+}
+
+std::size_t SegmentPairsWithin(const detail::SegmentBatch& first,
+                               const detail::SegmentBatch& second, const Real* within,
+                               std::uint32_t* passing) {
+  const hn::CappedTag<Real, detail::kSegmentBatchLanes> d;
+  const std::size_t lanes = hn::Lanes(d);
+  std::size_t found = 0;
+  for (std::size_t i = 0; i < first.count; i += lanes) {
+    // Lane k: first's segment k against second's (p1, d1 = q1 − p1 and a = d1·d1 as the
+    // scalar rule computes them).
+    const auto p1x = hn::LoadU(d, first.px + i), p1y = hn::LoadU(d, first.py + i),
+               p1z = hn::LoadU(d, first.pz + i);
+    const auto d1x = hn::Sub(hn::LoadU(d, first.qx + i), p1x),
+               d1y = hn::Sub(hn::LoadU(d, first.qy + i), p1y),
+               d1z = hn::Sub(hn::LoadU(d, first.qz + i), p1z);
+    const auto a = hn::Add(hn::Mul(d1x, d1x), hn::Add(hn::Mul(d1y, d1y), hn::Mul(d1z, d1z)));
+    const auto distance = SquaredDistancesAt(d, second, i, p1x, p1y, p1z, d1x, d1y, d1z, a);
+    const auto limit = hn::LoadU(d, within + i);
+    found = AppendPassing(d, hn::Lt(distance, hn::Mul(limit, limit)), i, first.count, passing,
+                          found);
+  }
   return found;
 }
 
@@ -126,6 +159,7 @@ namespace tessera::detail {
 
 HWY_EXPORT(SquaredSegmentDistances);
 HWY_EXPORT(SegmentsWithin);
+HWY_EXPORT(SegmentPairsWithin);
 
 void squared_segment_distances(const Vector3r& p1, const Vector3r& q1, const SegmentBatch& batch,
                                Real* out) {
@@ -136,6 +170,11 @@ std::size_t segments_within(const Vector3r& p1, const Vector3r& q1, Real own,
                             const SegmentBatch& batch, const Real* budget, Real* squared,
                             std::uint32_t* within) {
   return HWY_DYNAMIC_DISPATCH(SegmentsWithin)(p1, q1, own, batch, budget, squared, within);
+}
+
+std::size_t segment_pairs_within(const SegmentBatch& first, const SegmentBatch& second,
+                                 const Real* within, std::uint32_t* passing) {
+  return HWY_DYNAMIC_DISPATCH(SegmentPairsWithin)(first, second, within, passing);
 }
 
 }  // namespace tessera::detail

@@ -34,4 +34,11 @@ std::size_t segments_within(const Vector3r& p1, const Vector3r& q1, Real own,
                             const SegmentBatch& batch, const Real* budget, Real* squared,
                             std::uint32_t* within);
 
+/// The pairs k (below first.count; second.count the same) whose segments first k and second
+/// k are closer than within[k]: squared_segment_distance(p1, q1, p2, q2) < within[k]², with
+/// its bits (first's segments not point-like). Their positions k go to `passing` in
+/// increasing order; returns how many. Every array has the padded room.
+std::size_t segment_pairs_within(const SegmentBatch& first, const SegmentBatch& second,
+                                 const Real* within, std::uint32_t* passing);
+
 }  // namespace tessera::detail

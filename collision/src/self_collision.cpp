@@ -176,6 +176,67 @@ struct EdgeBatch {
   }
 };
 
+/// The edge pairs the filter measures exactly, by coordinate, and each pair's candidate
+/// index and distance to meet; one per thread, kept.
+struct EdgePairBatch {
+  std::vector<std::uint32_t> candidate, passing;
+  std::vector<Real> coordinates[12], within;  // first p, q, second p, q; x, y, z each
+  std::size_t count = 0;
+
+  void clear() { count = 0; }
+  void add(std::size_t k, const Vector3r (&first)[2], const Vector3r (&second)[2], Real limit) {
+    if (candidate.size() <= count + detail::kSegmentBatchLanes) {
+      const std::size_t room = 2 * (count + detail::kSegmentBatchLanes);
+      candidate.resize(room), passing.resize(room), within.resize(room);
+      for (std::vector<Real>& v : coordinates) v.resize(room);
+    }
+    const Vector3r* points[4] = {&first[0], &first[1], &second[0], &second[1]};
+    const Real tiny = kDegenerateTolerance * kDegenerateTolerance;
+    if (detail::dot3(first[1] - first[0], first[1] - first[0]) <= tiny) {
+      // A point-like first edge: the scalar rule decides, and the lane holds a pair that
+      // meets (distance 0) with a limit of 1 or 0 by its answer.
+      const bool meets = detail::squared_segment_distance(first[0], first[1], second[0],
+                                                          second[1]) < limit * limit;
+      static const Vector3r unit[4] = {Vector3r::Zero(), Vector3r::UnitX(), Vector3r::Zero(),
+                                       Vector3r::UnitY()};
+      for (int j = 0; j < 4; ++j) points[j] = &unit[j];
+      limit = meets ? Real(1) : Real(0);
+    }
+    for (int j = 0; j < 4; ++j)
+      for (int axis = 0; axis < 3; ++axis) coordinates[3 * j + axis][count] = (*points[j])[axis];
+    within[count] = limit;
+    candidate[count++] = std::uint32_t(k);
+  }
+  /// The candidates whose pair is closer than its limit, in the order added.
+  std::vector<std::uint32_t>& measure() {
+    found.clear();
+    if (count == 0) return found;
+    const std::size_t padded =
+        (count + detail::kSegmentBatchLanes - 1) / detail::kSegmentBatchLanes * detail::kSegmentBatchLanes;
+    for (std::size_t k = count; k < padded; ++k) {  // padding: computed and dropped
+      for (std::vector<Real>& v : coordinates) v[k] = 0;
+      coordinates[3][k] = 1;  // the first segment from the origin along x
+      within[k] = 0;
+    }
+    const auto batch = [&](int at) {
+      return detail::SegmentBatch{coordinates[at].data(),     coordinates[at + 1].data(),
+                                  coordinates[at + 2].data(), coordinates[at + 3].data(),
+                                  coordinates[at + 4].data(), coordinates[at + 5].data(),
+                                  count};
+    };
+    const std::size_t n =
+        detail::segment_pairs_within(batch(0), batch(6), within.data(), passing.data());
+    for (std::size_t j = 0; j < n; ++j) found.push_back(candidate[passing[j]]);
+    return found;
+  }
+  std::vector<std::uint32_t> found;
+};
+
+EdgePairBatch& edge_pair_batch() {
+  thread_local EdgePairBatch batch;
+  return batch;
+}
+
 EdgeBatch& edge_batch() {
   thread_local EdgeBatch batch;
   return batch;
@@ -780,25 +841,36 @@ void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
           buffer.push_back({p, t});
       },
       triangle_point_pairs_);
-  chunks_->edge_edge.run(
+  // Edge–edge: the bound and the axis test one candidate at a time, the exact distances of
+  // those left a vector at a time (segment_distances.cpp, squared_segment_distance's bits), in
+  // candidate order.
+  chunks_->edge_edge.run_chunks(
       settings.edge_edge ? candidate_edge_edge_.size() : 0,
-      [&](std::size_t k, std::vector<Pair>& buffer) {
-        const Candidate candidate = candidate_edge_edge_[k];
-        if (candidate.anchor_distance - edge_spread_[candidate.first] -
-                edge_spread_[candidate.second] >
-            ruled_out)
-          return;
-        const std::uint32_t p0 = edges_[2 * candidate.first], p1 = edges_[2 * candidate.first + 1];
-        const std::uint32_t p2 = edges_[2 * candidate.second], p3 = edges_[2 * candidate.second + 1];
-        ++chunks_->measured[chunks + k / detail::kCollisionChunk].measured;
-        const std::uint32_t first_ids[2] = {p0, p1}, second_ids[2] = {p2, p3};
-        const Real within = reach + relative_motion(motion_.data(), first_ids, second_ids);
-        const Vector3r first[2] = {particles.start(p0), particles.start(p1)};
-        const Vector3r second[2] = {particles.start(p2), particles.start(p3)};
-        if (separated_along_an_axis(first, second, within)) return;
-        if (detail::squared_segment_distance(first[0], first[1], second[0], second[1]) <
-            within * within)
+      [&](std::size_t begin, std::size_t end, std::vector<Pair>& buffer) {
+        EdgePairBatch& pairs = edge_pair_batch();
+        pairs.clear();
+        std::size_t measured = 0;
+        for (std::size_t k = begin; k < end; ++k) {
+          const Candidate candidate = candidate_edge_edge_[k];
+          if (candidate.anchor_distance - edge_spread_[candidate.first] -
+                  edge_spread_[candidate.second] >
+              ruled_out)
+            continue;
+          const std::uint32_t p0 = edges_[2 * candidate.first], p1 = edges_[2 * candidate.first + 1];
+          const std::uint32_t p2 = edges_[2 * candidate.second], p3 = edges_[2 * candidate.second + 1];
+          ++measured;
+          const std::uint32_t first_ids[2] = {p0, p1}, second_ids[2] = {p2, p3};
+          const Real within = reach + relative_motion(motion_.data(), first_ids, second_ids);
+          const Vector3r first[2] = {particles.start(p0), particles.start(p1)};
+          const Vector3r second[2] = {particles.start(p2), particles.start(p3)};
+          if (separated_along_an_axis(first, second, within)) continue;
+          pairs.add(k, first, second, within);
+        }
+        chunks_->measured[chunks + begin / detail::kCollisionChunk].measured = measured;
+        for (const std::uint32_t k : pairs.measure()) {
+          const Candidate& candidate = candidate_edge_edge_[k];
           buffer.push_back({candidate.first, candidate.second});
+        }
       },
       edge_edge_pairs_);
   measured_candidates_ = 0;

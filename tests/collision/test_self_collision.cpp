@@ -338,6 +338,30 @@ TEST(SelfCollision, BatchedSegmentDistancesAreTheScalarOnesBitForBitOnEveryTarge
       EXPECT_EQ(std::memcmp(within_squared.data(), squared.data(), n * sizeof(Real)), 0) << target;
       within_tested += n;
       within_found += found;
+      // segment_pairs_within: pair j of two batches (the first segments other pairs' second
+      // ones, point-like ones replaced), against the scalar rule at limits around each
+      // pair's distance.
+      std::vector<Real> fx(padded), fy(padded), fz(padded), gx(padded), gy(padded), gz(padded),
+          limit(padded, Real(0));
+      std::vector<std::uint32_t> pair_passing(padded);
+      std::vector<std::uint32_t> expected_pairs;
+      for (std::size_t j = 0; j < n; ++j) {
+        Vector3r p = c.p[(j + 1) % n], q = c.q[(j + 1) % n];
+        if (detail::dot3(q - p, q - p) <= kDegenerateTolerance * kDegenerateTolerance)
+          p = c.p1, q = c.q1;
+        fx[j] = p.x(), fy[j] = p.y(), fz[j] = p.z(), gx[j] = q.x(), gy[j] = q.y(), gz[j] = q.z();
+        const Real distance = detail::squared_segment_distance(p, q, c.p[j], c.q[j]);
+        limit[j] = std::sqrt(distance) + Real(int(j % 3) - 1) * Real(1e-3);
+        if (distance < limit[j] * limit[j]) expected_pairs.push_back(std::uint32_t(j));
+      }
+      const std::size_t pairs_found = detail::segment_pairs_within(
+          {fx.data(), fy.data(), fz.data(), gx.data(), gy.data(), gz.data(), n},
+          {px.data(), py.data(), pz.data(), qx.data(), qy.data(), qz.data(), n}, limit.data(),
+          pair_passing.data());
+      EXPECT_EQ(std::vector<std::uint32_t>(pair_passing.begin(),
+                                           pair_passing.begin() + std::ptrdiff_t(pairs_found)),
+                expected_pairs)
+          << target;
     }
   }
   force_simd_target("");

@@ -10,19 +10,27 @@
 
 namespace tessera::detail {
 
-/// The point of triangle (a, b, c) closest to p.
+/// u·v summed as x + (y + z), written out: the batched distances (segment_distances.cpp,
+/// triangle_distances.cpp) sum in this order to give these bits. (Eigen's dot() sums a float
+/// 3-vector so, but pairs a double one's lanes.)
+inline Real dot3(const Vector3r& u, const Vector3r& v) {
+  return u.x() * v.x() + (u.y() * v.y() + u.z() * v.z());
+}
+
+/// The point of triangle (a, b, c) closest to p. (triangle_distances.cpp computes the same
+/// bits a vector at a time: change both together.)
 inline Vector3r closest_point_on_triangle(const Vector3r& p, const Vector3r& a, const Vector3r& b,
                                           const Vector3r& c) {
   const Vector3r ab = b - a, ac = c - a, ap = p - a;
-  const Real d1 = ab.dot(ap), d2 = ac.dot(ap);
+  const Real d1 = dot3(ab, ap), d2 = dot3(ac, ap);
   if (d1 <= 0 && d2 <= 0) return a;  // vertex a
   const Vector3r bp = p - b;
-  const Real d3 = ab.dot(bp), d4 = ac.dot(bp);
+  const Real d3 = dot3(ab, bp), d4 = dot3(ac, bp);
   if (d3 >= 0 && d4 <= d3) return b;  // vertex b
   const Real vc = d1 * d4 - d3 * d2;
   if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;  // edge ab
   const Vector3r cp = p - c;
-  const Real d5 = ab.dot(cp), d6 = ac.dot(cp);
+  const Real d5 = dot3(ab, cp), d6 = dot3(ac, cp);
   if (d6 >= 0 && d5 <= d6) return c;  // vertex c
   const Real vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;  // edge ac
@@ -37,14 +45,8 @@ inline Vector3r closest_point_on_triangle(const Vector3r& p, const Vector3r& a, 
 
 inline Real squared_point_triangle_distance(const Vector3r& p, const Vector3r& a,
                                             const Vector3r& b, const Vector3r& c) {
-  return (p - closest_point_on_triangle(p, a, b, c)).squaredNorm();
-}
-
-/// u·v summed as x + (y + z), written out: the batched segment distances
-/// (segment_distances.cpp) sum in this order to give these bits. (Eigen's dot() sums a float
-/// 3-vector so, but pairs a double one's lanes.)
-inline Real dot3(const Vector3r& u, const Vector3r& v) {
-  return u.x() * v.x() + (u.y() * v.y() + u.z() * v.z());
+  const Vector3r gap = p - closest_point_on_triangle(p, a, b, c);
+  return dot3(gap, gap);
 }
 
 inline Real squared_segment_distance(const Vector3r& p1, const Vector3r& q1, const Vector3r& p2,

@@ -23,6 +23,7 @@
 
 #include <hwy/highway.h>
 
+#include "passing_lanes-inl.h"
 #include "segment_distances.hpp"
 
 HWY_BEFORE_NAMESPACE();
@@ -71,25 +72,6 @@ HWY_INLINE V SquaredDistancesAt(D d, const detail::SegmentBatch& batch, std::siz
   const auto gy = hn::Sub(hn::Add(p1y, hn::Mul(s, d1y)), hn::Add(p2y, hn::Mul(t, d2y)));
   const auto gz = hn::Sub(hn::Add(p1z, hn::Mul(s, d1z)), hn::Add(p2z, hn::Mul(t, d2z)));
   return dot(gx, gy, gz, gx, gy, gz);
-}
-
-/// Appends to `passing` (from position `found`) the positions i + k of the true lanes k of
-/// `mask` below `count` (past it: padding, dropped), in order, without a branch per lane;
-/// returns the new count. `passing` has room to i + lanes.
-template <class D, class M>
-HWY_INLINE std::size_t AppendPassing(D d, M mask, std::size_t i, std::size_t count,
-                                     std::uint32_t* passing, std::size_t found) {
-  std::uint8_t bytes[8] = {};
-  hn::StoreMaskBits(d, mask, bytes);
-  std::uint64_t bits = 0;
-  for (int k = 0; k < 8; ++k) bits |= std::uint64_t(bytes[k]) << (8 * k);
-  while (bits != 0) {
-    const std::size_t k = i + std::size_t(__builtin_ctzll(bits));
-    bits &= bits - 1;
-    passing[found] = std::uint32_t(k);
-    found += k < count;
-  }
-  return found;
 }
 
 /// Runs `each(i, squared)` on every vector of the batch: the first segment's lanes set once.

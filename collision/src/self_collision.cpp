@@ -28,6 +28,7 @@
 #include "chunked_output.hpp"
 #include "closest_distance.hpp"
 #include "segment_distances.hpp"
+#include "triangle_distances.hpp"
 
 namespace tessera {
 
@@ -175,6 +176,48 @@ struct EdgeBatch {
     return {within.data(), found};
   }
 };
+
+/// The triangles one vertex's query met, their anchors by coordinate and largest budget,
+/// for the batched point–triangle distances; one per thread, kept.
+struct TriangleBatch {
+  std::vector<std::uint32_t> triangles, within;
+  std::vector<Real> coordinates[9], budget, squared;  // a, b, c; x, y, z each
+
+  std::size_t count() const { return triangles.size(); }
+  template <class Anchors>
+  void gather(const Anchors* anchors) {
+    const std::size_t n = count();
+    const std::size_t padded =
+        (n + detail::kSegmentBatchLanes - 1) / detail::kSegmentBatchLanes * detail::kSegmentBatchLanes;
+    if (budget.size() < padded) {
+      for (std::vector<Real>& v : coordinates) v.resize(padded);
+      budget.resize(padded), squared.resize(padded), within.resize(padded);
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      const Anchors& triangle = anchors[triangles[k]];
+      for (int j = 0; j < 9; ++j) coordinates[j][k] = triangle.corner[j / 3][j % 3];
+      budget[k] = triangle.budget;
+    }
+    for (std::size_t k = n; k < padded; ++k) {  // padding: computed and dropped
+      for (std::vector<Real>& v : coordinates) v[k] = 0;
+      budget[k] = 0;
+    }
+  }
+  /// The triangles within own + their budget of p, as positions in the batch.
+  std::span<const std::uint32_t> measure(const Vector3r& p, Real own) {
+    const detail::TriangleBatch batch{
+        coordinates[0].data(), coordinates[1].data(), coordinates[2].data(),
+        coordinates[3].data(), coordinates[4].data(), coordinates[5].data(),
+        coordinates[6].data(), coordinates[7].data(), coordinates[8].data(),
+        budget.data(),         count()};
+    return {within.data(), detail::triangles_within(p, own, batch, squared.data(), within.data())};
+  }
+};
+
+TriangleBatch& triangle_batch() {
+  thread_local TriangleBatch batch;
+  return batch;
+}
 
 /// The edge pairs the filter measures exactly, by coordinate, and each pair's candidate
 /// index and distance to meet; one per thread, kept.
@@ -351,19 +394,6 @@ Real SelfCollision::budget_of(std::uint32_t i, const Vector3r& bulk,
   return 2 * settings.motion_scale * (motion_[i] - bulk).norm() + settings.skin;
 }
 
-void SelfCollision::add_triangle_point_candidate(std::uint32_t p, std::uint32_t t, Real reach,
-                                                 const SelfCollisionPositions& positions,
-                                                 std::vector<Candidate>& out) const {
-  const Particles particles{positions};
-  const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
-  if (p == a || p == b || p == c) return;
-  if (particles.all_static({p, a, b, c})) return;
-  const Real within = reach + budget_[p] + std::max({budget_[a], budget_[b], budget_[c]});
-  const Real squared =
-      detail::squared_point_triangle_distance(anchor_[p], anchor_[a], anchor_[b], anchor_[c]);
-  if (squared < within * within) out.push_back({p, t, std::sqrt(squared)});
-}
-
 void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real reach,
                                             const SelfCollisionPositions& positions,
                                             std::vector<Candidate>& out) const {
@@ -376,6 +406,38 @@ void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Re
       detail::squared_segment_distance(anchor_[p0], anchor_[p1], anchor_[p2], anchor_[p3]);
   if (squared < within * within)
     out.push_back({std::min(e, f), std::max(e, f), std::sqrt(squared)});
+}
+
+void SelfCollision::set_triangle_anchors(std::uint32_t t) {
+  TriangleAnchors& record = triangle_anchors_[t];
+  Real largest = 0;
+  for (int j = 0; j < 3; ++j) {
+    const std::uint32_t i = triangles_[3 * std::size_t(t) + std::size_t(j)];
+    for (int axis = 0; axis < 3; ++axis) record.corner[j][axis] = anchor_[i][axis];
+    largest = j == 0 ? budget_[i] : std::max(largest, budget_[i]);
+  }
+  record.budget = largest;
+}
+
+template <class Collect>
+void SelfCollision::add_triangle_point_candidates(std::uint32_t p, Real reach,
+                                                  const SelfCollisionPositions& positions,
+                                                  std::vector<Candidate>& out,
+                                                  Collect&& collect) const {
+  const Particles particles{positions};
+  TriangleBatch& batch = triangle_batch();
+  batch.triangles.clear();
+  collect([&](std::uint32_t t) { batch.triangles.push_back(t); });
+  if (batch.count() == 0) return;
+  // The candidate rule: the distance test first (a vector at a time), then the topology of
+  // those within it (not a corner of the triangle, not all four static).
+  batch.gather(triangle_anchors_.data());
+  for (const std::uint32_t k : batch.measure(anchor_[p], reach + budget_[p])) {
+    const std::uint32_t t = batch.triangles[k];
+    const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
+    if (p == a || p == b || p == c || particles.all_static({p, a, b, c})) continue;
+    out.push_back({p, t, std::sqrt(batch.squared[k])});
+  }
 }
 
 void SelfCollision::set_edge_anchors(std::uint32_t e) {
@@ -467,8 +529,11 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   parallel_over(particle_count_,
                 [&](std::size_t i) { vertex_boxes_[i] = vertex_box(std::uint32_t(i), reach); });
   triangle_boxes_.resize(triangle_count);
-  parallel_over(triangle_count,
-                [&](std::size_t t) { triangle_boxes_[t] = triangle_box(std::uint32_t(t)); });
+  triangle_anchors_.resize(triangle_count);
+  parallel_over(triangle_count, [&](std::size_t t) {
+    triangle_boxes_[t] = triangle_box(std::uint32_t(t));
+    set_triangle_anchors(std::uint32_t(t));
+  });
   const std::size_t edge_queries = settings.edge_edge ? edge_count : 0;
   edge_anchors_.resize(edge_queries);
   parallel_over(edge_queries, [&](std::size_t e) { set_edge_anchors(std::uint32_t(e)); });
@@ -484,8 +549,8 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
       [&](std::size_t vertex, std::vector<Candidate>& buffer) {
         const std::uint32_t p = std::uint32_t(vertex);
         const std::size_t first = buffer.size();
-        triangle_grid_.for_each_overlap(vertex_boxes_[p], [&](std::uint32_t t) {
-          add_triangle_point_candidate(p, t, reach, positions, buffer);
+        add_triangle_point_candidates(p, reach, positions, buffer, [&](auto&& visit) {
+          triangle_grid_.for_each_overlap(vertex_boxes_[p], visit);
         });
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
                   [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
@@ -618,6 +683,7 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
     largest = std::max(largest, anchor_[i].cwiseAbs().maxCoeff());
   }
   departure_allowance_ = std::max(departure_allowance_, kAllowancePerCoordinate * largest);
+  for (const std::uint32_t t : new_triangles_) set_triangle_anchors(t);
   if (settings.edge_edge)
     for (const std::uint32_t e : new_edges_) set_edge_anchors(e);
   for (const std::uint32_t t : new_triangles_)
@@ -652,11 +718,12 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
         const std::uint32_t p = outran_[k];
         const std::size_t first = buffer.size();
         const Aabb box = vertex_box(p, reach);
-        triangle_grid_.for_each_overlap(box, [&](std::uint32_t t) {
-          if (!reboxed_triangle_[t]) add_triangle_point_candidate(p, t, reach, positions, buffer);
-        });
-        reboxed_triangle_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
-          add_triangle_point_candidate(p, reboxed_triangles_[entry], reach, positions, buffer);
+        add_triangle_point_candidates(p, reach, positions, buffer, [&](auto&& visit) {
+          triangle_grid_.for_each_overlap(box, [&](std::uint32_t t) {
+            if (!reboxed_triangle_[t]) visit(t);
+          });
+          reboxed_triangle_grid_.for_each_overlap(
+              box, [&](std::uint32_t entry) { visit(reboxed_triangles_[entry]); });
         });
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
                   [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
@@ -678,9 +745,11 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
           const Aabb box = vertex_box(p, reach);
           if (!overlap(box, reach_of_new)) return;
           const std::size_t first = buffer.size();
-          reboxed_triangle_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
-            const std::uint32_t t = reboxed_triangles_[entry];
-            if (new_triangle_[t]) add_triangle_point_candidate(p, t, reach, positions, buffer);
+          add_triangle_point_candidates(p, reach, positions, buffer, [&](auto&& visit) {
+            reboxed_triangle_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
+              const std::uint32_t t = reboxed_triangles_[entry];
+              if (new_triangle_[t]) visit(t);
+            });
           });
           std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
                     [](const Candidate& l, const Candidate& r) { return l.second < r.second; });

@@ -19,6 +19,7 @@
 
 #include "closest_distance.hpp"
 #include "segment_distances.hpp"
+#include "triangle_distances.hpp"
 
 namespace tessera {
 namespace {
@@ -369,6 +370,87 @@ TEST(SelfCollision, BatchedSegmentDistancesAreTheScalarOnesBitForBitOnEveryTarge
   // Both answers occur.
   EXPECT_GT(within_found, within_tested / 5);
   EXPECT_LT(within_found, 4 * within_tested / 5);
+}
+
+TEST(SelfCollision, BatchedTriangleDistancesAreTheScalarOnesBitForBitOnEveryTarget) {
+  // The build measures its vertex–triangle pairs a vector at a time (triangle_distances.cpp):
+  // each lane must give squared_point_triangle_distance's bits and the same answer to
+  // "closer than own + budget", whichever Voronoi region holds the closest point: points
+  // over the face and beyond each vertex and edge, on the region borders (the point level
+  // with a corner or an edge), near-degenerate and degenerate (collinear, point-like)
+  // triangles; on every target the machine runs.
+  std::mt19937 random(11);
+  std::uniform_real_distribution<Real> coordinate(-1, 1), unit(0, 1);
+  const auto point = [&] { return Vector3r(coordinate(random), coordinate(random), coordinate(random)); };
+  struct Case {
+    Vector3r p;
+    std::vector<Vector3r> a, b, c;
+  };
+  std::vector<Case> cases;
+  for (int k = 0; k < 40; ++k) {
+    Case c{point(), {}, {}, {}};
+    for (int j = 0; j < 45; ++j) {
+      Vector3r a = point(), b = point(), t = point();
+      if (j % 5 == 1) {  // collinear corners
+        t = a + unit(random) * (b - a);
+      } else if (j % 5 == 2) {  // a point-like triangle
+        b = a, t = a;
+      } else if (j % 5 == 3) {  // p level with a corner or on an edge's line: region borders
+        const Vector3r corners[3] = {a, b, t};
+        const Vector3r& from = corners[j % 3];
+        const Vector3r& to = corners[(j + 1) % 3];
+        c.a.push_back(a), c.b.push_back(b), c.c.push_back(t);
+        a = c.p + (from - to);  // p − a parallel to an edge
+        b = c.p, t = point();  // p on a corner
+      } else if (j % 5 == 4) {  // a thin sliver
+        t = Real(0.5) * (a + b) + Real(1e-4) * point();
+      }
+      c.a.push_back(a), c.b.push_back(b), c.c.push_back(t);
+    }
+    cases.push_back(std::move(c));
+  }
+  std::size_t compared = 0, found_total = 0;
+  for (const std::string& target : available_simd_targets()) {
+    force_simd_target(target);
+    for (const Case& c : cases) {
+      const std::size_t n = c.a.size();
+      const std::size_t padded = (n + detail::kSegmentBatchLanes - 1) / detail::kSegmentBatchLanes *
+                                 detail::kSegmentBatchLanes;
+      std::vector<Real> xyz[9], budget(padded, Real(0)), squared(padded);
+      for (std::vector<Real>& v : xyz) v.assign(padded, Real(0));
+      std::vector<std::uint32_t> within(padded), expected_within;
+      const Real own = Real(0.1);
+      for (std::size_t j = 0; j < n; ++j) {
+        const Vector3r* corners[3] = {&c.a[j], &c.b[j], &c.c[j]};
+        for (int v = 0; v < 9; ++v) xyz[v][j] = (*corners[v / 3])[v % 3];
+        const Real expected = detail::squared_point_triangle_distance(c.p, c.a[j], c.b[j], c.c[j]);
+        // Budgets around each pair's distance, some exactly at it.
+        budget[j] = std::max(Real(0), std::sqrt(expected) - own + Real(int(j % 3) - 1) * Real(0.01));
+        const Real limit = own + budget[j];
+        if (expected < limit * limit) expected_within.push_back(std::uint32_t(j));
+      }
+      const std::size_t found = detail::triangles_within(
+          c.p, own,
+          {xyz[0].data(), xyz[1].data(), xyz[2].data(), xyz[3].data(), xyz[4].data(),
+           xyz[5].data(), xyz[6].data(), xyz[7].data(), xyz[8].data(), budget.data(), n},
+          squared.data(), within.data());
+      for (std::size_t j = 0; j < n; ++j) {
+        const Real expected = detail::squared_point_triangle_distance(c.p, c.a[j], c.b[j], c.c[j]);
+        EXPECT_EQ(std::memcmp(&squared[j], &expected, sizeof(Real)), 0)
+            << target << ": triangle " << j << " gives " << squared[j] << ", the scalar rule "
+            << expected;
+        ++compared;
+      }
+      EXPECT_EQ(std::vector<std::uint32_t>(within.begin(), within.begin() + std::ptrdiff_t(found)),
+                expected_within)
+          << target;
+      found_total += found;
+    }
+  }
+  force_simd_target("");
+  EXPECT_GT(compared, 1000u);
+  EXPECT_GT(found_total, compared / 5);
+  EXPECT_LT(found_total, 4 * compared / 5);
 }
 
 TEST(SelfCollision, AFoldedClothHasExactlyTheBruteForceContacts) {

@@ -257,9 +257,6 @@ class SelfCollision {
   bool outran(const Departure& squared, std::uint32_t i) const;
   /// The candidate rule on the anchors: closer than the reach plus the two budgets. A
   /// candidate is appended to `out` with its distance.
-  void add_triangle_point_candidate(std::uint32_t p, std::uint32_t t, Real reach,
-                                    const SelfCollisionPositions& positions,
-                                    std::vector<Candidate>& out) const;
   void add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real reach,
                                const SelfCollisionPositions& positions,
                                std::vector<Candidate>& out) const;
@@ -271,6 +268,15 @@ class SelfCollision {
                                 std::vector<Candidate>& out, Collect&& collect) const;
   /// Edge e's record in edge_anchors_, from its particles' anchors and budgets.
   void set_edge_anchors(std::uint32_t e);
+  /// The same rule for vertex p and every triangle t that collect(visit) visits, their
+  /// distances a vector at a time (triangle_distances.cpp), in the order visited. Reads
+  /// triangle_anchors_.
+  template <class Collect>
+  void add_triangle_point_candidates(std::uint32_t p, Real reach,
+                                     const SelfCollisionPositions& positions,
+                                     std::vector<Candidate>& out, Collect&& collect) const;
+  /// Triangle t's record in triangle_anchors_.
+  void set_triangle_anchors(std::uint32_t t);
   /// Every particle's departure from its room under `frame`, into departure_, and the
   /// rounding allowance of the filter's bound; with `outran_list`, also the particles that
   /// left their room (ascending), from the same squared lengths.
@@ -331,6 +337,11 @@ class SelfCollision {
     Real p[3], q[3], budget, unused;
   };
   std::vector<EdgeAnchors> edge_anchors_;
+  /// Each triangle's anchors (a, b, c) and largest budget, as the vertex queries read them.
+  struct alignas(4 * sizeof(Real)) TriangleAnchors {
+    Real corner[3][3], budget;
+  };
+  std::vector<TriangleAnchors> triangle_anchors_;
   UniformGrid triangle_grid_, edge_grid_;
   std::vector<Pair> triangle_point_pairs_, edge_edge_pairs_;
   // The last detection's candidates, which refine() filters.

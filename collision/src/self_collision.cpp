@@ -461,7 +461,7 @@ void SelfCollision::add_edge_edge_candidates(std::uint32_t e, Real reach,
   collect([&](std::uint32_t f) { batch.edges.push_back(f); });
   if (batch.count() == 0) return;
   const Real tiny = kDegenerateTolerance * kDegenerateTolerance;
-  if ((anchor_[p1] - anchor_[p0]).squaredNorm() <= tiny) {
+  if (detail::dot3(anchor_[p1] - anchor_[p0], anchor_[p1] - anchor_[p0]) <= tiny) {  // as the rule
     // A point-like edge: the scalar rule, which handles it.
     for (const std::uint32_t f : batch.edges) add_edge_edge_candidate(e, f, reach, positions, out);
     return;
@@ -536,6 +536,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
     set_triangle_anchors(std::uint32_t(t));
   });
   const std::size_t edge_queries = settings.edge_edge ? edge_count : 0;
+  built_with_edge_edge_ = settings.edge_edge;
   edge_anchors_.resize(edge_queries);
   parallel_over(edge_queries, [&](std::size_t e) { set_edge_anchors(std::uint32_t(e)); });
   edge_boxes_.resize(edge_queries);
@@ -619,7 +620,9 @@ SelfCollision::Update SelfCollision::update(const SelfCollisionPositions& positi
                                             const SelfCollisionSettings& settings,
                                             Contacts& out) {
   check(positions, settings);
-  if (anchor_.size() != particle_count_) {
+  // Before any detection, or when edge–edge contacts were switched since the last one (its
+  // edge grid, records and candidates are those of the other setting): a build.
+  if (anchor_.size() != particle_count_ || settings.edge_edge != built_with_edge_edge_) {
     detect(positions, settings, out);
     return Update::built;
   }

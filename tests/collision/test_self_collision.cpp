@@ -525,6 +525,80 @@ TEST(SelfCollision, ADetectionStopsCoveringWhenAParticleOutrunsItsBudget) {
   EXPECT_FALSE(collision.covers(fast)) << "particle 40 moves 0.1 h in this substep";
 }
 
+TEST(SelfCollision, SwitchingEdgeEdgeContactsBetweenUpdatesBuildsAgain) {
+  // A flat 20 × 20 sheet (spacing 1) and two loose triangles. The last build's edge grid,
+  // records and candidates belong to its edge_edge setting: an update with the other one
+  // builds, and every update gives the contacts of a detection of its own. (Before, a
+  // re-box with edge–edge on after a build without it wrote past the edges' records, and
+  // switching off and on again left re-boxed edges' records stale: 0 edge–edge contacts
+  // where a detection finds 4.)
+  struct Sheet {
+    std::vector<std::uint32_t> triangles;
+    std::vector<Real> x, y, z, w;
+    std::size_t count = 0, first_probe = 0, second_probe = 0;
+    void add(Real a, Real b, Real c) { x.push_back(a), y.push_back(b), z.push_back(c), w.push_back(1), ++count; }
+    void place(std::size_t i, Real a, Real b, Real c) { x[i] = a, y[i] = b, z[i] = c; }
+    // At rest: the start of the substep is where it ends.
+    SelfCollisionPositions positions() const {
+      return {x.data(), y.data(), z.data(), x.data(), y.data(), z.data(), w.data(), count};
+    }
+  } sheet;
+  const int n = 20;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) sheet.add(Real(i), Real(j), 0);
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const std::uint32_t a = std::uint32_t(j * n + i), b = a + 1, c = a + n, d = c + 1;
+      sheet.triangles.insert(sheet.triangles.end(), {a, b, d, a, d, c});
+    }
+  for (std::size_t* probe : {&sheet.first_probe, &sheet.second_probe}) {
+    *probe = sheet.count;
+    const Real at = Real(100 * (probe == &sheet.first_probe ? 1 : 2));
+    sheet.add(at, at, 50), sheet.add(at + 1, at, 50), sheet.add(at, at + 1, 50);
+    const std::uint32_t p = std::uint32_t(*probe);
+    sheet.triangles.insert(sheet.triangles.end(), {p, p + 1, p + 2});
+  }
+  const auto settings = [](bool edge_edge) {
+    SelfCollisionSettings s{Real(0.1), 0};
+    s.skin = Real(0.02), s.edge_edge = edge_edge;
+    return s;
+  };
+  const auto detected = [&](bool edge_edge) {
+    SelfCollision fresh(sheet.triangles, sheet.count);
+    Contacts contacts;
+    fresh.detect(sheet.positions(), settings(edge_edge), contacts);
+    return contacts;
+  };
+  const std::size_t a = sheet.first_probe, b = sheet.second_probe;
+  {
+    SelfCollision collision(sheet.triangles, sheet.count);
+    Contacts contacts;
+    EXPECT_EQ(collision.update(sheet.positions(), settings(true), contacts), SelfCollision::Update::built);
+    // The first probe moves with edge–edge off, then the second crosses its edge (a, a + 1)
+    // 0.05 below it with edge–edge on.
+    sheet.place(a, 300, 300, 10), sheet.place(a + 1, 302, 300, 10), sheet.place(a + 2, 300, 302, 10);
+    EXPECT_EQ(collision.update(sheet.positions(), settings(false), contacts), SelfCollision::Update::built);
+    EXPECT_EQ(contacts.edge_edge, detected(false).edge_edge);
+    sheet.place(b, 301, 299, Real(9.95)), sheet.place(b + 1, 301, 301, Real(9.95)),
+        sheet.place(b + 2, 303, 299, Real(9.95));
+    EXPECT_EQ(collision.update(sheet.positions(), settings(true), contacts), SelfCollision::Update::built);
+    const Contacts expected = detected(true);
+    EXPECT_GT(expected.edge_edge_count(), 0u);
+    EXPECT_EQ(contacts.edge_edge, expected.edge_edge);
+    EXPECT_EQ(contacts.triangle_point, expected.triangle_point);
+  }
+  {
+    // Edge–edge off at the build, on at the next update (a re-box before): a build, exact.
+    SelfCollision collision(sheet.triangles, sheet.count);
+    Contacts contacts;
+    EXPECT_EQ(collision.update(sheet.positions(), settings(false), contacts), SelfCollision::Update::built);
+    sheet.place(a + 2, 300, Real(300.5), Real(9.9));
+    EXPECT_EQ(collision.update(sheet.positions(), settings(true), contacts), SelfCollision::Update::built);
+    EXPECT_EQ(contacts.edge_edge, detected(true).edge_edge);
+    EXPECT_EQ(contacts.triangle_point, detected(true).triangle_point);
+  }
+}
+
 TEST(SelfCollision, UpdatesRebuildOnlyWhatOutranItsRoomAndMatchADetectionEachSubstep) {
   // The folded cloth at rest but for a patch of its upper layer that dives onto the lower
   // one, speeding up each substep: those particles outrun the room a build gave them, so

@@ -102,6 +102,8 @@ struct SelfCollisionSettings {
   /// Whether to find edge–edge contacts. They take three quarters of the detection
   /// (three edges per vertex, each a query of the edge grid); without them a crossing of
   /// two edges whose vertices stay out of reach of the other's triangles goes unseen.
+  /// update() builds again when this changes; refine() finds edge–edge contacts only among
+  /// the candidates of a detection that had it on.
   bool edge_edge = true;
   /// The substeps a detection's candidates are meant to last at the particles' speeds
   /// (see "Reusing a detection" above): each particle's budget is 2 k |Δ − ū| + skin, ū the
@@ -346,6 +348,7 @@ class SelfCollision {
     Real p[3], q[3], budget, unused;
   };
   std::vector<EdgeAnchors> edge_anchors_;
+  bool built_with_edge_edge_ = false;  // the last build's SelfCollisionSettings::edge_edge
   /// Each triangle's anchors (a, b, c) and largest budget, as the vertex queries read them.
   struct alignas(4 * sizeof(Real)) TriangleAnchors {
     Real corner[3][3], budget;

@@ -22,7 +22,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/parallel_sort.h>
 
 #include <tessera/core/error.hpp>
 
@@ -35,7 +34,7 @@ namespace tessera {
 
 struct SelfCollision::Chunks {
   detail::ChunkedOutput<Candidate> triangle_point_candidates, edge_edge_candidates,
-      triangle_point_others, replaced;
+      triangle_point_others;
   detail::ChunkedOutput<Pair> triangle_point, edge_edge;
   detail::ChunkedOutput<std::uint32_t> vertices;
   /// The filter's measured candidates per chunk, a cache line each (one thread per chunk).
@@ -710,6 +709,12 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   // their boxes now are in the second grids.
   new_vertex_.assign(particle_count_, 0);
   for (const std::uint32_t i : outran_) new_vertex_[i] = 1;
+  std::erase_if(candidate_triangle_point_, [&](const Candidate& pair) {
+    return new_vertex_[pair.first] || new_triangle_[pair.second];
+  });
+  std::erase_if(candidate_edge_edge_, [&](const Candidate& pair) {
+    return new_edge_[pair.first] || new_edge_[pair.second];
+  });
   chunks_->triangle_point_candidates.run(
       outran_.size(),
       [&](std::size_t k, std::vector<Candidate>& buffer) {
@@ -755,11 +760,8 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
         found_others_);
     merge_sorted(found_triangle_point_, found_others_);
   }
-  replace_candidates(candidate_triangle_point_, found_triangle_point_, [&](const Candidate& pair) {
-    return new_vertex_[pair.first] || new_triangle_[pair.second];
-  });
+  merge_sorted(candidate_triangle_point_, found_triangle_point_);
 
-  found_edge_edge_.clear();
   if (settings.edge_edge) {
     chunks_->edge_edge_candidates.run(
         new_edges_.size(),
@@ -778,51 +780,23 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
           });
         },
         found_edge_edge_);
-    // Each pair once (two new edges: from the lower), so the keys are distinct and an
-    // unstable parallel sort gives one order.
-    tbb::parallel_sort(found_edge_edge_.begin(), found_edge_edge_.end(), before);
+    std::sort(found_edge_edge_.begin(), found_edge_edge_.end(),
+              [](const Candidate& l, const Candidate& r) {
+                return l.first != r.first ? l.first < r.first : l.second < r.second;
+              });
+    merge_sorted(candidate_edge_edge_, found_edge_edge_);
   }
-  replace_candidates(candidate_edge_edge_, found_edge_edge_, [&](const Candidate& pair) {
-    return new_edge_[pair.first] || new_edge_[pair.second];
-  });
   return true;
-}
-
-template <class Removed>
-void SelfCollision::replace_candidates(std::vector<Candidate>& into,
-                                       const std::vector<Candidate>& more, Removed&& removed) {
-  // One parallel pass in fixed chunks of `into`: chunk [begin, end) keeps its candidates
-  // that are not removed and takes in the new ones whose keys fall from its first key to
-  // the next chunk's first (the first chunk: all below; the last: all above), merged. The
-  // new ones name a new primitive, so no key of theirs is kept: the order is total.
-  const std::size_t n = into.size();
-  if (n == 0) {
-    merged_.assign(more.begin(), more.end());
-  } else {
-    chunks_->replaced.run_chunks(
-        n,
-        [&](std::size_t begin, std::size_t end, std::vector<Candidate>& buffer) {
-          auto next = begin == 0 ? more.begin()
-                                 : std::lower_bound(more.begin(), more.end(), into[begin], before);
-          const auto last =
-              end == n ? more.end() : std::lower_bound(more.begin(), more.end(), into[end], before);
-          for (std::size_t k = begin; k < end; ++k) {
-            if (removed(into[k])) continue;
-            for (; next != last && before(*next, into[k]); ++next) buffer.push_back(*next);
-            buffer.push_back(into[k]);
-          }
-          buffer.insert(buffer.end(), next, last);
-        },
-        merged_);
-  }
-  into.swap(merged_);
 }
 
 void SelfCollision::merge_sorted(std::vector<Candidate>& into,
                                  const std::vector<Candidate>& more) {
   if (more.empty()) return;
   merged_.resize(into.size() + more.size());
-  std::merge(into.begin(), into.end(), more.begin(), more.end(), merged_.begin(), before);
+  std::merge(into.begin(), into.end(), more.begin(), more.end(), merged_.begin(),
+             [](const Candidate& l, const Candidate& r) {
+               return l.first != r.first ? l.first < r.first : l.second < r.second;
+             });
   into.swap(merged_);
 }
 

@@ -228,10 +228,6 @@ class SelfCollision {
     std::uint32_t first, second;
     Real anchor_distance;
   };
-  /// The candidates' order: by first, then second.
-  static bool before(const Candidate& l, const Candidate& r) {
-    return l.first != r.first ? l.first < r.first : l.second < r.second;
-  }
   /// How far a particle has left its room this substep: its way since it was anchored
   /// (w, in the frame) and its motion against the bulk's (m).
   struct Departure {
@@ -303,11 +299,6 @@ class SelfCollision {
   void filter_candidates(const SelfCollisionPositions& positions,
                          const SelfCollisionSettings& settings, Real reach);
   void merge_sorted(std::vector<Candidate>& into, const std::vector<Candidate>& more);
-  /// `into` without the candidates that `removed` names, merged with `more` (sorted, none
-  /// of it removed), sorted: parallel, the same for any thread count.
-  template <class Removed>
-  void replace_candidates(std::vector<Candidate>& into, const std::vector<Candidate>& more,
-                          Removed&& removed);
   /// The pairs as the particle lists of `out`.
   void emit(Contacts& out) const;
 

@@ -18,6 +18,10 @@ struct SegmentBatch {
 };
 /// The widest vector the dispatch may pick, in lanes of Real (AVX-512 float).
 inline constexpr std::size_t kSegmentBatchLanes = 16;
+/// `count` rounded up to a multiple of kSegmentBatchLanes: the room a batch's arrays need.
+constexpr std::size_t padded_to_lanes(std::size_t count) {
+  return (count + kSegmentBatchLanes - 1) / kSegmentBatchLanes * kSegmentBatchLanes;
+}
 
 /// out[k] = the squared distance between segment (p1, q1) and the batch's segment k, for k
 /// below count rounded up to the lanes (out has that room). p1 ≠ q1 (not point-like: the

@@ -153,8 +153,7 @@ struct EdgeBatch {
   template <class Anchors>
   void gather(const Anchors* anchors) {
     const std::size_t n = count();
-    const std::size_t padded =
-        (n + detail::kSegmentBatchLanes - 1) / detail::kSegmentBatchLanes * detail::kSegmentBatchLanes;
+    const std::size_t padded = detail::padded_to_lanes(n);
     for (std::vector<Real>* v : {&px, &py, &pz, &qx, &qy, &qz, &budget, &squared})
       if (v->size() < padded) v->resize(padded);
     if (within.size() < padded) within.resize(padded);
@@ -187,8 +186,7 @@ struct TriangleBatch {
   template <class Anchors>
   void gather(const Anchors* anchors) {
     const std::size_t n = count();
-    const std::size_t padded =
-        (n + detail::kSegmentBatchLanes - 1) / detail::kSegmentBatchLanes * detail::kSegmentBatchLanes;
+    const std::size_t padded = detail::padded_to_lanes(n);
     if (budget.size() < padded) {
       for (std::vector<Real>& v : coordinates) v.resize(padded);
       budget.resize(padded), squared.resize(padded), within.resize(padded);
@@ -254,8 +252,7 @@ struct EdgePairBatch {
   std::vector<std::uint32_t>& measure() {
     found.clear();
     if (count == 0) return found;
-    const std::size_t padded =
-        (count + detail::kSegmentBatchLanes - 1) / detail::kSegmentBatchLanes * detail::kSegmentBatchLanes;
+    const std::size_t padded = detail::padded_to_lanes(count);
     for (std::size_t k = count; k < padded; ++k) {  // padding: computed and dropped
       for (std::vector<Real>& v : coordinates) v[k] = 0;
       coordinates[3][k] = 1;  // the first segment from the origin along x

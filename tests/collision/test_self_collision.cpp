@@ -298,8 +298,7 @@ TEST(SelfCollision, BatchedSegmentDistancesAreTheScalarOnesBitForBitOnEveryTarge
     force_simd_target(target);
     for (const Case& c : cases) {
       const std::size_t n = c.p.size();
-      const std::size_t padded = (n + detail::kSegmentBatchLanes - 1) / detail::kSegmentBatchLanes *
-                                 detail::kSegmentBatchLanes;
+      const std::size_t padded = detail::padded_to_lanes(n);
       std::vector<Real> px(padded), py(padded), pz(padded), qx(padded), qy(padded), qz(padded),
           squared(padded);
       for (std::size_t j = 0; j < n; ++j)
@@ -414,8 +413,7 @@ TEST(SelfCollision, BatchedTriangleDistancesAreTheScalarOnesBitForBitOnEveryTarg
     force_simd_target(target);
     for (const Case& c : cases) {
       const std::size_t n = c.a.size();
-      const std::size_t padded = (n + detail::kSegmentBatchLanes - 1) / detail::kSegmentBatchLanes *
-                                 detail::kSegmentBatchLanes;
+      const std::size_t padded = detail::padded_to_lanes(n);
       std::vector<Real> xyz[9], budget(padded, Real(0)), squared(padded);
       for (std::vector<Real>& v : xyz) v.assign(padded, Real(0));
       std::vector<std::uint32_t> within(padded), expected_within;

@@ -134,7 +134,8 @@ void CollisionStage::detect(const ParticleState& state, Real h, Real gravity,
                                .stiffness = settings_.self_stiffness,
                                .edge_edge = !all_solid,
                                .motion_scale = Real(kSelfCollisionMotionSubsteps),
-                               .skin = kSelfCollisionSkin * settings_.thickness};
+                               .skin = kSelfCollisionSkin * settings_.thickness,
+                               .horizon = interval - 1};
     // The grids at most every `interval` substeps; in between, the last build's candidates
     // filtered at this substep's positions, the primitives of a particle that moved beyond
     // its room re-boxed first (self_collision.hpp): the same contacts as a build every

@@ -82,19 +82,30 @@ void inflate(Aabb& box, Real by) {
   for (int axis = 0; axis < 3; ++axis) box.lo[axis] -= by, box.hi[axis] += by;
 }
 
-/// The box of the anchors of particles `ids`, grown by the largest of their budgets and by
+/// The paths of particles `ids` and what they may stray: the box of their references now
+/// and `steps` substeps on (every reference between is on the segments, so in the box),
+/// grown by their largest budget, their largest speed (one substep of relative motion) and
 /// `reach`.
+struct Paths {
+  const Vector3r* reference;
+  const Vector3r* velocity;
+  const Real* speed;
+  const Real* budget;
+};
 template <std::size_t N>
-Aabb anchor_box(const std::uint32_t (&ids)[N], const Vector3r* anchor, const Real* budget,
-                Real reach) {
-  const Vector3r& a = anchor[ids[0]];
+Aabb swept_box(const std::uint32_t (&ids)[N], const Paths& paths, Real steps, Real reach) {
+  const Vector3r& a = paths.reference[ids[0]];
   Aabb box{{a.x(), a.y(), a.z()}, {a.x(), a.y(), a.z()}};
-  Real grow = 0;
+  Real budget = 0, speed = 0;
   for (const std::uint32_t i : ids) {
-    include(box, anchor[i].x(), anchor[i].y(), anchor[i].z());
-    grow = std::max(grow, budget[i]);
+    const Vector3r& now = paths.reference[i];
+    const Vector3r later = now + steps * paths.velocity[i];
+    include(box, now.x(), now.y(), now.z());
+    include(box, later.x(), later.y(), later.z());
+    budget = std::max(budget, paths.budget[i]);
+    speed = std::max(speed, paths.speed[i]);
   }
-  inflate(box, grow + reach);
+  inflate(box, budget + speed + reach);
   return box;
 }
 
@@ -142,26 +153,45 @@ Real relative_motion(const Vector3r* motion, const std::uint32_t (&a)[N],
   return std::sqrt(most);
 }
 
-/// The edges one edge's query met, their anchors by coordinate and the larger budget of
-/// each, for the batched segment distances; one per thread, kept (allocation-free once grown).
+/// A velocity ball: the centre and radius of a primitive's corners' velocities.
+struct VelocityBall {
+  Real centre[3], radius;
+};
+
+/// What `steps` substeps of relative motion of two primitives can close at most: steps ρ,
+/// with ρ = max |V_i − V_j| over their corners at most the distance of their balls' centres
+/// plus both radii.
+template <class Record>
+Real allowed_between(const VelocityBall& own, const Record& other, Real steps) {
+  const Real dx = own.centre[0] - other.centre[0], dy = own.centre[1] - other.centre[1],
+             dz = own.centre[2] - other.centre[2];
+  return steps * (own.radius + other.radius + std::sqrt(dx * dx + dy * dy + dz * dz));
+}
+
+/// The edges one edge's query met, their references by coordinate and each one's distance
+/// allowance (its budget and the pair's relative motion to the horizon), for the batched
+/// segment distances; one per thread, kept (allocation-free once grown).
 struct EdgeBatch {
   std::vector<std::uint32_t> edges, within;
-  std::vector<Real> px, py, pz, qx, qy, qz, budget, squared;
+  std::vector<Real> px, py, pz, qx, qy, qz, budget, allowed, squared;
 
   std::size_t count() const { return edges.size(); }
-  /// Sizes the arrays to the edges met (padded to the lanes) and fills them from `anchors`.
+  /// Sizes the arrays to the edges met (padded to the lanes) and fills them from `anchors`:
+  /// allowed[k] the pair's relative motion over `steps` substeps, budget[k] that plus the
+  /// edge's budget.
   template <class Anchors>
-  void gather(const Anchors* anchors) {
+  void gather(const Anchors* anchors, const VelocityBall& own, Real steps) {
     const std::size_t n = count();
     const std::size_t padded = detail::padded_to_lanes(n);
-    for (std::vector<Real>* v : {&px, &py, &pz, &qx, &qy, &qz, &budget, &squared})
+    for (std::vector<Real>* v : {&px, &py, &pz, &qx, &qy, &qz, &budget, &allowed, &squared})
       if (v->size() < padded) v->resize(padded);
     if (within.size() < padded) within.resize(padded);
     for (std::size_t k = 0; k < n; ++k) {
       const Anchors& edge = anchors[edges[k]];
       px[k] = edge.p[0], py[k] = edge.p[1], pz[k] = edge.p[2];
       qx[k] = edge.q[0], qy[k] = edge.q[1], qz[k] = edge.q[2];
-      budget[k] = edge.budget;
+      allowed[k] = allowed_between(own, edge, steps);
+      budget[k] = edge.budget + allowed[k];
     }
     // The padding lanes: a point at the origin, measured and dropped.
     for (std::size_t k = n; k < padded; ++k)
@@ -176,25 +206,27 @@ struct EdgeBatch {
   }
 };
 
-/// The triangles one vertex's query met, their anchors by coordinate and largest budget,
-/// for the batched point–triangle distances; one per thread, kept.
+/// The triangles one vertex's query met, their references by coordinate and distance
+/// allowances (as EdgeBatch's), for the batched point–triangle distances; one per thread,
+/// kept.
 struct TriangleBatch {
   std::vector<std::uint32_t> triangles, within;
-  std::vector<Real> coordinates[9], budget, squared;  // a, b, c; x, y, z each
+  std::vector<Real> coordinates[9], budget, allowed, squared;  // a, b, c; x, y, z each
 
   std::size_t count() const { return triangles.size(); }
   template <class Anchors>
-  void gather(const Anchors* anchors) {
+  void gather(const Anchors* anchors, const VelocityBall& own, Real steps) {
     const std::size_t n = count();
     const std::size_t padded = detail::padded_to_lanes(n);
     if (budget.size() < padded) {
       for (std::vector<Real>& v : coordinates) v.resize(padded);
-      budget.resize(padded), squared.resize(padded), within.resize(padded);
+      budget.resize(padded), allowed.resize(padded), squared.resize(padded), within.resize(padded);
     }
     for (std::size_t k = 0; k < n; ++k) {
       const Anchors& triangle = anchors[triangles[k]];
       for (int j = 0; j < 9; ++j) coordinates[j][k] = triangle.corner[j / 3][j % 3];
-      budget[k] = triangle.budget;
+      allowed[k] = allowed_between(own, triangle, steps);
+      budget[k] = triangle.budget + allowed[k];
     }
     for (std::size_t k = n; k < padded; ++k) {  // padding: computed and dropped
       for (std::vector<Real>& v : coordinates) v[k] = 0;
@@ -384,11 +416,43 @@ Vector3r SelfCollision::bulk_motion() {
   return median_of(particle_count_, [&](std::size_t i) { return motion_[i]; }, scratch_);
 }
 
-Real SelfCollision::budget_of(std::uint32_t i, const Vector3r& bulk,
-                              const SelfCollisionSettings& settings) const {
-  // b = 2 (k |Δ − ū| + skin / 2), ū the bulk's (median) motion: half for the motion of a
-  // substep, half for the way since the particle was anchored (covers()).
-  return 2 * settings.motion_scale * (motion_[i] - bulk).norm() + settings.skin;
+void SelfCollision::anchor_on_path(std::uint32_t i, const Frame& frame,
+                                   const SelfCollisionPositions& positions,
+                                   const SelfCollisionSettings& settings) {
+  const Particles particles{positions};
+  velocity_[i] = motion_[i] - frame.motion;
+  speed_[i] = velocity_[i].norm();
+  anchor_[i] = particles.start(i) - frame.way - frame.substep * velocity_[i];
+  // A change of motion a per substep strays a particle by about a τ (τ + 1) / 2 from its path
+  // after τ substeps, and its motion by a τ (the solver's corrections come on top of the
+  // prediction: measured on the drape, the first substep strays by about a already); b/2
+  // holds both for k substeps.
+  const Real change = previous_motion_.size() == particle_count_
+                          ? (motion_[i] - previous_motion_[i]).norm()
+                          : Real(0);
+  const Real k = settings.motion_scale;
+  budget_[i] = settings.skin + k * (k + 1) * change;
+}
+
+void SelfCollision::refresh_references(const SelfCollisionSettings& settings) {
+  const Real tau = Real(substep_);
+  parallel_over(particle_count_,
+                [&](std::size_t i) { reference_[i] = anchor_[i] + tau * velocity_[i]; });
+  parallel_over(triangles_.size() / 3, [&](std::size_t t) { set_triangle_anchors(std::uint32_t(t)); });
+  parallel_over(settings.edge_edge ? edges_.size() / 2 : 0,
+                [&](std::size_t e) { set_edge_anchors(std::uint32_t(e)); });
+}
+
+template <std::size_t N>
+void SelfCollision::velocity_ball(const std::uint32_t (&ids)[N], Real (&centre)[3],
+                                  Real& radius) const {
+  Vector3r mean = Vector3r::Zero();
+  for (const std::uint32_t i : ids) mean += velocity_[i];
+  mean /= Real(N);
+  Real most = 0;
+  for (const std::uint32_t i : ids) most = std::max(most, (velocity_[i] - mean).squaredNorm());
+  for (int axis = 0; axis < 3; ++axis) centre[axis] = mean[axis];
+  radius = std::sqrt(most);
 }
 
 void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Real reach,
@@ -398,22 +462,28 @@ void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Re
   const std::uint32_t p0 = edges_[2 * e], p1 = edges_[2 * e + 1];
   const std::uint32_t p2 = edges_[2 * f], p3 = edges_[2 * f + 1];
   if (!particles.may_touch(p0, p1, p2, p3)) return;
-  const Real within = reach + std::max(budget_[p0], budget_[p1]) + std::max(budget_[p2], budget_[p3]);
-  const Real squared =
-      detail::squared_segment_distance(anchor_[p0], anchor_[p1], anchor_[p2], anchor_[p3]);
+  const Real squared = detail::squared_segment_distance(reference_[p0], reference_[p1],
+                                                        reference_[p2], reference_[p3]);
+  const EdgeAnchors& own = edge_anchors_[e];
+  const Real allowed = allowed_between(VelocityBall{{own.centre[0], own.centre[1], own.centre[2]},
+                                                    own.radius},
+                                       edge_anchors_[f], substeps_allowed());
+  const Real within = reach + own.budget + edge_anchors_[f].budget + allowed;
   if (squared < within * within)
-    out.push_back({std::min(e, f), std::max(e, f), std::sqrt(squared)});
+    out.push_back({std::min(e, f), std::max(e, f), std::sqrt(squared) - allowed});
 }
 
 void SelfCollision::set_triangle_anchors(std::uint32_t t) {
   TriangleAnchors& record = triangle_anchors_[t];
-  Real largest = 0;
+  const std::uint32_t ids[3] = {triangles_[3 * std::size_t(t)], triangles_[3 * std::size_t(t) + 1],
+                                triangles_[3 * std::size_t(t) + 2]};
+  Real budget = 0;
   for (int j = 0; j < 3; ++j) {
-    const std::uint32_t i = triangles_[3 * std::size_t(t) + std::size_t(j)];
-    for (int axis = 0; axis < 3; ++axis) record.corner[j][axis] = anchor_[i][axis];
-    largest = j == 0 ? budget_[i] : std::max(largest, budget_[i]);
+    for (int axis = 0; axis < 3; ++axis) record.corner[j][axis] = reference_[ids[j]][axis];
+    budget = std::max(budget, budget_[ids[j]]);
   }
-  record.budget = largest;
+  record.budget = budget;
+  velocity_ball(ids, record.centre, record.radius);
 }
 
 template <class Collect>
@@ -428,21 +498,25 @@ void SelfCollision::add_triangle_point_candidates(std::uint32_t p, Real reach,
   if (batch.count() == 0) return;
   // The candidate rule: the distance test first (a vector at a time), then the topology of
   // those within it (not a corner of the triangle, not all four static).
-  batch.gather(triangle_anchors_.data());
-  for (const std::uint32_t k : batch.measure(anchor_[p], reach + budget_[p])) {
+  const Vector3r& v = velocity_[p];
+  batch.gather(triangle_anchors_.data(), VelocityBall{{v.x(), v.y(), v.z()}, 0}, substeps_allowed());
+  for (const std::uint32_t k : batch.measure(reference_[p], reach + budget_[p])) {
     const std::uint32_t t = batch.triangles[k];
     const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
     if (p == a || p == b || p == c || particles.all_static({p, a, b, c})) continue;
-    out.push_back({p, t, std::sqrt(batch.squared[k])});
+    out.push_back({p, t, std::sqrt(batch.squared[k]) - batch.allowed[k]});
   }
 }
 
 void SelfCollision::set_edge_anchors(std::uint32_t e) {
   const std::uint32_t p = edges_[2 * e], q = edges_[2 * e + 1];
-  edge_anchors_[e] = {{anchor_[p].x(), anchor_[p].y(), anchor_[p].z()},
-                      {anchor_[q].x(), anchor_[q].y(), anchor_[q].z()},
-                      std::max(budget_[p], budget_[q]),
-                      0};
+  EdgeAnchors& record = edge_anchors_[e];
+  for (int axis = 0; axis < 3; ++axis)
+    record.p[axis] = reference_[p][axis], record.q[axis] = reference_[q][axis];
+  record.budget = std::max(budget_[p], budget_[q]);
+  const std::uint32_t ids[2] = {p, q};
+  velocity_ball(ids, record.centre, record.radius);
+  record.unused = 0;
 }
 
 template <class Collect>
@@ -457,33 +531,40 @@ void SelfCollision::add_edge_edge_candidates(std::uint32_t e, Real reach,
   collect([&](std::uint32_t f) { batch.edges.push_back(f); });
   if (batch.count() == 0) return;
   const Real tiny = kDegenerateTolerance * kDegenerateTolerance;
-  if (detail::dot3(anchor_[p1] - anchor_[p0], anchor_[p1] - anchor_[p0]) <= tiny) {  // as the rule
+  const Vector3r way = reference_[p1] - reference_[p0];
+  if (detail::dot3(way, way) <= tiny) {  // as the rule
     // A point-like edge: the scalar rule, which handles it.
     for (const std::uint32_t f : batch.edges) add_edge_edge_candidate(e, f, reach, positions, out);
     return;
   }
   // The distance test first (a vector at a time, no branch per edge met), then the topology
   // of the few within it: the same candidates as add_edge_edge_candidate, in the same order.
-  batch.gather(edge_anchors_.data());
-  const Real own = reach + std::max(budget_[p0], budget_[p1]);
-  for (const std::uint32_t k : batch.measure(anchor_[p0], anchor_[p1], own)) {
+  const EdgeAnchors& record = edge_anchors_[e];
+  batch.gather(edge_anchors_.data(),
+               VelocityBall{{record.centre[0], record.centre[1], record.centre[2]}, record.radius},
+               substeps_allowed());
+  for (const std::uint32_t k : batch.measure(reference_[p0], reference_[p1], reach + record.budget)) {
     const std::uint32_t f = batch.edges[k];
     if (particles.may_touch(p0, p1, edges_[2 * f], edges_[2 * f + 1]))
-      out.push_back({std::min(e, f), std::max(e, f), std::sqrt(batch.squared[k])});
+      out.push_back({std::min(e, f), std::max(e, f), std::sqrt(batch.squared[k]) - batch.allowed[k]});
   }
 }
 
+// The boxes of the paths from now to the horizon's end.
 Aabb SelfCollision::vertex_box(std::uint32_t p, Real reach) const {
   const std::uint32_t ids[1] = {p};
-  return anchor_box(ids, anchor_.data(), budget_.data(), reach);
+  return swept_box(ids, {reference_.data(), velocity_.data(), speed_.data(), budget_.data()},
+                   Real(horizon_ - substep_), reach);
 }
 Aabb SelfCollision::triangle_box(std::uint32_t t) const {
   const std::uint32_t ids[3] = {triangles_[3 * t], triangles_[3 * t + 1], triangles_[3 * t + 2]};
-  return anchor_box(ids, anchor_.data(), budget_.data(), 0);
+  return swept_box(ids, {reference_.data(), velocity_.data(), speed_.data(), budget_.data()},
+                   Real(horizon_ - substep_), 0);
 }
 Aabb SelfCollision::edge_box(std::uint32_t e, Real reach) const {
   const std::uint32_t ids[2] = {edges_[2 * e], edges_[2 * e + 1]};
-  return anchor_box(ids, anchor_.data(), budget_.data(), reach / 2);
+  return swept_box(ids, {reference_.data(), velocity_.data(), speed_.data(), budget_.data()},
+                   Real(horizon_ - substep_), reach / 2);
 }
 
 void SelfCollision::detect(const SelfCollisionPositions& positions,
@@ -491,10 +572,11 @@ void SelfCollision::detect(const SelfCollisionPositions& positions,
   check(positions, settings);
   const Real reach = compute_motion(positions, settings).distance;
   const Vector3r bulk = build(positions, settings, reach);
-  // This substep's contacts among the candidates: every particle at its anchor (w = 0).
-  measure_departures(positions, Frame{Vector3r::Zero(), bulk});
+  // This substep's contacts among the candidates: every particle on its path (w = m = 0).
+  measure_departures(positions, Frame{Vector3r::Zero(), bulk, 0});
   filter_candidates(positions, settings, reach);
   emit(out);
+  previous_motion_.swap(motion_);
 }
 
 Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
@@ -502,14 +584,18 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   const Particles particles{positions};
   const std::size_t triangle_count = triangles_.size() / 3;
   const std::size_t edge_count = edges_.size() / 2;
-  // Every particle anchored here: the frame's origin (covers()).
+  // Every particle anchored here on the path of its motion against the bulk's: the frame's
+  // origin (covers()).
   const Vector3r bulk = bulk_motion();
+  substep_ = 0;
+  horizon_ = settings.horizon;
+  for (auto* v : {&anchor_, &velocity_, &reference_, &frame_origin_}) v->resize(particle_count_);
   budget_.resize(particle_count_);
-  anchor_.resize(particle_count_);
-  frame_origin_.resize(particle_count_);
+  speed_.resize(particle_count_);
   parallel_over(particle_count_, [&](std::size_t i) {
-    budget_[i] = budget_of(std::uint32_t(i), bulk, settings);
-    anchor_[i] = frame_origin_[i] = particles.start(std::uint32_t(i));
+    anchor_on_path(std::uint32_t(i), Frame{Vector3r::Zero(), bulk, 0}, positions, settings);
+    reference_[i] = anchor_[i];
+    frame_origin_[i] = particles.start(std::uint32_t(i));
   });
   reboxed_triangle_.assign(triangle_count, 0);
   reboxed_edge_.assign(edge_count, 0);
@@ -518,10 +604,12 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   reboxed_triangle_grid_.build({});
   reboxed_edge_grid_.build({});
 
-  // Candidates: the pairs whose anchors are closer than the reach plus their particles'
-  // budgets. Boxes: the anchors grown by the budgets and the reach, the vertex's by all of
-  // the reach and an edge's by half. A pair within that distance has overlapping boxes, since
-  // no coordinate differs by more than the distance; so the grid misses no candidate.
+  // Candidates: the pairs whose references can come closer than the reach plus their
+  // particles' budgets and a substep of relative motion before the horizon's end (the top of
+  // self_collision.hpp). Boxes: the paths to then, grown by the budgets, the speeds and the
+  // reach, the vertex's by all of the reach and an edge's by half. A pair within that
+  // distance at some substep has overlapping boxes, since no coordinate differs by more than
+  // the distance; so the grid misses no candidate.
   vertex_boxes_.resize(particle_count_);
   parallel_over(particle_count_,
                 [&](std::size_t i) { vertex_boxes_[i] = vertex_box(std::uint32_t(i), reach); });
@@ -586,10 +674,11 @@ SelfCollision::Frame SelfCollision::frame(const SelfCollisionPositions& position
 SelfCollision::Departure SelfCollision::squared_departure(
     std::uint32_t i, const Frame& frame, const SelfCollisionPositions& positions) const {
   const Particles particles{positions};
-  // w = |x_start − W − anchor| (its way since it was anchored, in the frame that moves by
-  // the bulk's way W) and m = |Δ − ū| (this substep's motion against the bulk's).
-  return {(particles.start(i) - frame.way - anchor_[i]).squaredNorm(),
-          (motion_[i] - frame.motion).squaredNorm()};
+  // w = |x_start − W − R(τ)| (how far it is from its path, in the frame that moves by the
+  // bulk's way W) and m = |Δ − ū − V| (this substep's motion against its path's).
+  const Vector3r on_path = anchor_[i] + frame.substep * velocity_[i];
+  return {(particles.start(i) - frame.way - on_path).squaredNorm(),
+          (motion_[i] - frame.motion - velocity_[i]).squaredNorm()};
 }
 
 bool SelfCollision::outran(const Departure& squared, std::uint32_t i) const {
@@ -600,8 +689,10 @@ bool SelfCollision::outran(const Departure& squared, std::uint32_t i) const {
 
 bool SelfCollision::covers(const SelfCollisionPositions& positions) {
   if (positions.count != particle_count_ || anchor_.size() != particle_count_) return false;
+  if (substep_ + 1 > horizon_) return false;
   measure_motion(positions);  // scratch: every entry point measures it anew
-  const Frame now = frame(positions);
+  Frame now = frame(positions);
+  now.substep = Real(substep_ + 1);  // the substep refine() would filter
   return tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, particle_count_, 4096), true,
       [&](const tbb::blocked_range<std::size_t>& range, bool all) {
@@ -623,29 +714,31 @@ SelfCollision::Update SelfCollision::update(const SelfCollisionPositions& positi
     return Update::built;
   }
   const Real reach = compute_motion(positions, settings).distance;
-  const Frame now = frame(positions);
-  // The departures and the particles that outran their room, in one pass.
-  measure_departures(positions, now, &outran_);
+  Frame now = frame(positions);
   Update done = Update::refined;
-  if (!outran_.empty()) {
-    if (!rebox(positions, settings, reach, now)) {
-      build(positions, settings, reach);
-      done = Update::built;
-    } else {
-      done = Update::reboxed;
-    }
+  if (substep_ + 1 > horizon_) {
+    done = Update::built;  // past the horizon the candidates' allowance ends
+  } else {
+    ++substep_;
+    now.substep = Real(substep_);
+    // The departures and the particles that outran their room, in one pass.
+    measure_departures(positions, now, &outran_);
+    if (!outran_.empty()) done = rebox(positions, settings, reach, now) ? Update::reboxed : Update::built;
   }
-  // A build anchors every particle at its start: a new frame that has not moved. (A re-box
-  // settled its particles' departures itself.)
-  if (done == Update::built) measure_departures(positions, Frame{Vector3r::Zero(), now.motion});
+  // A build anchors every particle on its path at its start: a new frame that has not
+  // moved. (A re-box settled its particles' departures itself.)
+  if (done == Update::built) {
+    build(positions, settings, reach);
+    measure_departures(positions, Frame{Vector3r::Zero(), now.motion, 0});
+  }
   filter_candidates(positions, settings, reach);
   emit(out);
+  previous_motion_.swap(motion_);
   return done;
 }
 
 bool SelfCollision::rebox(const SelfCollisionPositions& positions,
                           const SelfCollisionSettings& settings, Real reach, const Frame& now) {
-  const Particles particles{positions};
   const std::size_t triangle_count = triangles_.size() / 3;
   // New: the primitives of the particles that outran their room (N); reboxed: those and
   // the ones reboxed since the build (C), whose entries in the main grids are stale.
@@ -671,21 +764,20 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   std::sort(new_triangles_.begin(), new_triangles_.end());
   std::sort(new_edges_.begin(), new_edges_.end());
 
-  // Re-anchor the particles that outran their room, in the frame.
-  const Vector3r bulk = now.motion;
-  // Their departures under `now` (measured before): no way since (start − W − anchor is
-  // exactly 0), the same motion; the allowance grows to their new anchors' coordinates.
+  // Re-anchor the particles that outran their room on the path of their motion now, in the
+  // frame; their departures under `now` measured again (about 0: on the path, up to
+  // rounding), and the allowance grown to their new anchors' coordinates.
   Real largest = 0;
   for (const std::uint32_t i : outran_) {
-    budget_[i] = budget_of(i, bulk, settings);
-    anchor_[i] = particles.start(i) - now.way;
-    departure_[i].way = 0;
+    anchor_on_path(i, now, positions, settings);
+    const Departure squared = squared_departure(i, now, positions);
+    departure_[i] = {std::sqrt(squared.way), std::sqrt(squared.motion)};
     largest = std::max(largest, anchor_[i].cwiseAbs().maxCoeff());
   }
   departure_allowance_ = std::max(departure_allowance_, kAllowancePerCoordinate * largest);
-  for (const std::uint32_t t : new_triangles_) set_triangle_anchors(t);
-  if (settings.edge_edge)
-    for (const std::uint32_t e : new_edges_) set_edge_anchors(e);
+  // Every reference and record at this substep: the new primitives are tested against the
+  // others where both are now, with the horizon left.
+  refresh_references(settings);
   for (const std::uint32_t t : new_triangles_)
     if (!reboxed_triangle_[t]) reboxed_triangle_[t] = 1, reboxed_triangles_.push_back(t);
   for (const std::uint32_t e : new_edges_)
@@ -826,9 +918,14 @@ void SelfCollision::refine(const SelfCollisionPositions& positions,
     emit(out);
     return;
   }
-  measure_departures(positions, frame(positions));
+  // The next substep on the paths (past the horizon they stop: covers() is false there).
+  substep_ = std::min(substep_ + 1, horizon_);
+  Frame now = frame(positions);
+  now.substep = Real(substep_);
+  measure_departures(positions, now);
   filter_candidates(positions, settings, reach.distance);
   emit(out);
+  previous_motion_.swap(motion_);
 }
 
 void SelfCollision::measure_departures(const SelfCollisionPositions& positions,
@@ -896,7 +993,7 @@ void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
       [&](std::size_t k, std::vector<Pair>& buffer) {
         const Candidate candidate = candidate_triangle_point_[k];
         const std::uint32_t p = candidate.first, t = candidate.second;
-        if (candidate.anchor_distance - vertex_spread_[p] - triangle_spread_[t] > ruled_out)
+        if (candidate.bound - vertex_spread_[p] - triangle_spread_[t] > ruled_out)
           return;
         const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
         ++chunks_->measured[k / detail::kCollisionChunk].measured;
@@ -921,7 +1018,7 @@ void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
         std::size_t measured = 0;
         for (std::size_t k = begin; k < end; ++k) {
           const Candidate candidate = candidate_edge_edge_[k];
-          if (candidate.anchor_distance - edge_spread_[candidate.first] -
+          if (candidate.bound - edge_spread_[candidate.first] -
                   edge_spread_[candidate.second] >
               ruled_out)
             continue;

@@ -465,20 +465,30 @@ TEST(SelfCollision, AFoldedClothHasExactlyTheBruteForceContacts) {
 }
 
 TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContacts) {
-  // The folded cloth's top layer moves down at a constant 0.2 h per substep; a detection
-  // whose budgets cover four substeps of that motion still covers each of the next four,
-  // and refined there lists what a detection at that substep finds (and no more).
+  // The folded cloth's top layer moves down at a constant 0.2 h per substep. A detection puts
+  // each particle on the path of its motion, so with a skin of 0.01 h for rounding it still
+  // covers each of the next four substeps of the same motion, and refined there lists what a
+  // detection at that substep finds (and no more).
   FoldedCloth cloth(24);
   ParticleState& s = cloth.state;
   SelfCollision once(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
   SelfCollisionSettings settings{Real(0.4) * cloth.spacing(), Real(0.1) * cloth.spacing()};
-  settings.motion_scale = 4;
+  settings.skin = Real(0.01) * cloth.spacing();
+  settings.horizon = 4;
   Contacts first, refined, direct;
   EXPECT_FALSE(once.covers(s)) << "no detection yet";
   once.detect(s, settings, first);
+  const auto next_substep = [&] {  // one more substep of the same motion
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const Real step = s.y[i] - s.previous_y[i];
+      s.previous_y[i] = s.y[i];
+      s.y[i] += step;
+    }
+  };
   std::size_t changes = 0;
-  std::vector<ParticleIndex> previous_list;
-  for (int substep = 0; substep < 4; ++substep) {
+  std::vector<ParticleIndex> previous_list = first.triangle_point;
+  for (int substep = 1; substep <= 4; ++substep) {
+    next_substep();
     EXPECT_TRUE(once.covers(s)) << substep;
     once.refine(s, settings, refined);
     every.detect(s, settings, direct);
@@ -488,14 +498,40 @@ TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContac
     EXPECT_LE(refined.triangle_point_count() + refined.edge_edge_count(), once.candidate_count());
     changes += refined.triangle_point != previous_list;
     previous_list = refined.triangle_point;
-    for (std::size_t i = 0; i < s.size(); ++i) {  // one more substep of the same motion
-      const Real step = s.y[i] - s.previous_y[i];
-      s.previous_y[i] = s.y[i];
-      s.y[i] += step;
-    }
   }
   EXPECT_GE(changes, 2u) << "the contacts change as the layers approach";
   EXPECT_GT(once.candidate_count(), direct.triangle_point_count() + direct.edge_edge_count());
+  next_substep();
+  EXPECT_FALSE(once.covers(s)) << "past the horizon";
+}
+
+TEST(SelfCollision, AParticleOffItsPathIsNotCoveredThoughItMovesLikeTheBulk) {
+  // The top layer moves down at 0.2 h per substep and the detection puts it on that path.
+  // One particle of it that stops dead (its motion now the bottom layer's, which is the
+  // bulk's) has left its path though it moves like the bulk: not covered, and update()
+  // re-boxes it and lists exactly a detection's contacts.
+  FoldedCloth cloth(24);
+  ParticleState& s = cloth.state;
+  const Real h = cloth.spacing();
+  SelfCollision updated(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
+  SelfCollisionSettings settings{Real(0.4) * h, Real(0.1) * h};
+  settings.skin = Real(0.05) * h;
+  Contacts by_update, direct;
+  ASSERT_EQ(updated.update(s, settings, by_update), SelfCollision::Update::built);
+  std::size_t stopped = s.size();
+  for (std::size_t i = 0; i < s.size() && stopped == s.size(); ++i)
+    if (s.y[i] != s.previous_y[i] && s.inverse_mass[i] != 0) stopped = i;
+  ASSERT_LT(stopped, s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const Real step = i == stopped ? Real(0) : s.y[i] - s.previous_y[i];
+    s.previous_y[i] = s.y[i];
+    s.y[i] += step;
+  }
+  EXPECT_FALSE(updated.covers(s)) << "particle " << stopped << " stopped off its path";
+  EXPECT_EQ(updated.update(s, settings, by_update), SelfCollision::Update::reboxed);
+  every.detect(s, settings, direct);
+  EXPECT_EQ(by_update.triangle_point, direct.triangle_point);
+  EXPECT_EQ(by_update.edge_edge, direct.edge_edge);
 }
 
 TEST(SelfCollision, ADetectionStopsCoveringWhenAParticleOutrunsItsBudget) {

@@ -42,29 +42,28 @@ inline constexpr Real kDefaultThickness = Real(0.005);
 inline constexpr Real kDefaultStaticFriction = Real(0.4);
 inline constexpr Real kDefaultDynamicFriction = Real(0.3);
 /// The most substeps between self-collision grid builds (CollisionSettings::
-/// self_collision_interval). A build lists candidate pairs with room for each particle to
-/// move (kSelfCollisionMotionSubsteps substeps of its motion against the cloth's median, plus
-/// kSelfCollisionSkin thicknesses); every substep until the next build tests them at its own
-/// positions, and a particle that has moved beyond its room gets its primitives re-boxed
-/// (SelfCollision::update; a full build when they pass SelfCollision::kReboxedShare of the
-/// mesh). So the contacts are exactly those of a detection every substep: every setting below
-/// ends the drape on the same state_hash, only the cost moves. Re-measured with the filter
-/// that skips candidates by their anchor distance (detection seconds, 128² drape, one run
-/// each, Zen 4 VM; 120 frames on 2 threads, 30 frames on 1 thread):
+/// self_collision_interval). A build puts each particle on the straight path of its motion
+/// and lists the candidate pairs whose paths can come within reach before the next build
+/// (interval − 1 substeps on: SelfCollisionSettings::horizon), with room for each particle
+/// to stray from its path (kSelfCollisionMotionSubsteps substeps of the change of its
+/// motion, plus kSelfCollisionSkin thicknesses); every substep until the next build tests
+/// them at its own positions, and a particle that has strayed beyond its room gets its
+/// primitives re-boxed (SelfCollision::update; a full build when they pass
+/// SelfCollision::kReboxedShare of the mesh). So the contacts are exactly those of a
+/// detection every substep: every setting below ends the drape on the same state_hash, only
+/// the cost moves. Detection seconds, 128² drape, 30 frames, 1 thread, Zen 3 VM, two runs
+/// each (single runs differ by up to 10 %):
 ///
-///   room (substeps, skin)   120 frames, 2T              30 frames, 1T
-///   2, 0.1  (the default)   51.3 s (1,197 builds)       27.3 s (259 builds)
-///   1, 0.1                  54.5 s (1,764 builds)       24.2 s (368 builds)
-///   1, 0.05                 54.7 s                      23.1 s
-///   3, 0.1                  –                           33.1 s
-///   2, 0.3 / 2, 0.5         –                           30.3 s / 35.9 s
-///   1, 0                    –                           44.6 s (720 builds)
+///   interval                 4 (the default)   3             5             8
+///                            13.6 / 14.8 s     14.5 / 16.0   14.8 / 14.9   16.2
+///   room (substeps, skin)    2, 0.1 (default)  1.5, 0.1      3, 0.1        2, 0.05 / 2, 0.2
+///                            as above          14.5 / 15.3   14.1 / 14.5   14.8–15.7 / 13.7–15.1
 ///
-/// One substep of room wins on the first 30 frames and loses over the drape's fast folds.
-/// The cap matters little (every 16th substep against the default 8th: 27.4 s against
-/// 27.3 s on 30 frames): the folds, not
-/// the cap, set how often a build comes.
-inline constexpr std::size_t kDefaultSelfCollisionInterval = 8;
+/// A longer interval lists more candidates (each pair allows for interval substeps of its
+/// paths' relative motion, and the boxes are swept along the paths): 16 and 32 substeps took
+/// 28 s and 47 s. Before the paths, with one frame moving at the cloth's median motion, the
+/// same run took 23.6–27.3 s (docs/performance.md, "Paths").
+inline constexpr std::size_t kDefaultSelfCollisionInterval = 4;
 inline constexpr std::size_t kSelfCollisionMotionSubsteps = 2;
 inline constexpr Real kSelfCollisionSkin = Real(0.1);
 

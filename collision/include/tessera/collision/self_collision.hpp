@@ -24,33 +24,46 @@
 // that crosses a triangle within the substep: it is found at neither end. Contacts are
 // therefore registered before the crossing, at the start-of-substep side.
 //
-// Reusing a detection (the grids are the cost; the rule is cheap). A detection lists as
-// candidates every pair closer at the start than r + b(pair), where each particle gets a
-// budget b = 2 (k |Δ − ū| + skin / 2) (ū the median motion, k = motion_scale) and a pair's
-// budget adds its two primitives' largest. On a later substep, write for each particle
+// Reusing a detection (the grids are the cost; the rule is cheap). Each particle is given a
+// straight path at the detection, its reference
 //
-//   w = |start − anchor − W|   its way since the detection (anchor: its start then;
-//                              W the median way: the cloth may drift as a whole)
-//   m = |Δ − ū|                its motion over this substep against the median motion
+//   R(τ) = A + τ V       τ the substeps since the build, V = Δ − ū its motion then against
+//                        the bulk's (ū the median motion), A its start then (less the bulk's way)
 //
-// The rule's left side d_start − max |Δp − Δx| is at least the detection's distance minus
-// the largest w and m of each primitive, so while every particle keeps w ≤ b/2 and m ≤ b/2
-// (covers()), each pair that meets the rule was a candidate: filtering the candidates
-// (refine()) gives exactly the contacts of a detection of its own. The broad phase grows each
-// box by its particles' budgets, so the grids miss no candidate. A cloth falling as a whole
-// has only its resting pairs as candidates, and keeps them.
+// and a budget b = skin + k (k + 1) |Δ − Δ_prev| (k = motion_scale; Δ_prev its motion of the
+// substep before: the room for k substeps of the change of its motion). On a later substep
+// τ, write for each particle
+//
+//   w = |start − W − R(τ)|   how far it is from its path (W the bulk's way since the build:
+//                            the cloth may drift as a whole)
+//   m = |Δ − ū − V|          how far its motion is from its path's
+//
+// A pair's references come closer by at most ρ = max |V_i − V_j| per substep (over a corner
+// i of the one and j of the other: each hull point moves by a convex combination of its
+// corners' velocities), so at substep τ the rule's left side d_start − max |Δp − Δx| is at
+// least d_c − (τ − τ_c) ρ − ρ − (w_max + m_max)(first) − (w_max + m_max)(second), d_c the
+// distance of the references at τ_c, the substep the pair was tested. A detection therefore
+// lists as candidates the pairs with
+//
+//   d_c < r + (T − τ_c + 1) ρ + b(first) + b(second)     T = horizon, b the corners' largest
+//
+// and while every particle keeps w ≤ b/2 and m ≤ b/2 and τ ≤ T (covers()), each pair that
+// meets the rule is a candidate: filtering the candidates (refine()) gives exactly the
+// contacts of a detection of its own. The broad phase grows each primitive's box, swept from
+// its references at τ_c to those at T, by its largest b + |V| (the pair's ρ is at most the
+// sum of the two), so the grids miss no candidate. A cloth moving on straight lines, whatever
+// its speeds, keeps its candidates the whole horizon; a cloth in the plane with itself has as
+// candidates the neighbours that approach, not every one within its budgets. (The frame
+// before was the bulk's motion alone: a fast fold left its room within two substeps, and each
+// particle's room was its whole speed against the median; the paths measured on the drape
+// stay 30 times closer to the particles after a substep, docs/performance.md.)
 //
 // Filtering without measuring most candidates. Most candidates are neighbours in the cloth's
-// plane, a little beyond the reach (0.7 h apart against r ≈ 0.6 h on the drape), and stay
-// there. A candidate keeps its distance d_anchor at the anchors; the hull distance moves by
-// at most each side's largest way w, and the rule's approach is at most each side's largest
-// m, so
-//
-//   d_start − max |Δp − Δx|  ≥  d_anchor − (w_max + m_max)(first) − (w_max + m_max)(second)
-//
-// and a candidate whose right side passes r (by a rounding allowance: 10⁻³ r plus 10⁻⁵ of
-// the largest coordinate) cannot be a contact: the filter skips its exact distance. The same
-// contacts as measuring every candidate, at a fraction of the reads.
+// plane, a little beyond the reach, and stay there. A candidate keeps the least its bound can
+// be over the horizon, d_c − (T − τ_c + 1) ρ, and a candidate whose bound less each side's
+// largest w and m passes r (by a rounding allowance: 10⁻³ r plus 10⁻⁵ of the largest
+// coordinate) cannot be a contact: the filter skips its exact distance. The same contacts as
+// measuring every candidate, at a fraction of the reads.
 //
 // Limit (the kernel measures |p − q|, unsigned): a contact keeps a vertex on its side only
 // while the vertex has not passed the triangle when the kernel first sees it. Starting from a
@@ -73,9 +86,8 @@
 // segment distance each), and each of the 16,384 vertices meets ~17 triangle boxes; a
 // query scans ~95 entries of the grid for those. Hence reuse: the stage calls update(),
 // which filters the candidates while every particle keeps to its room, re-boxes only the
-// primitives of the particles that left it (re-anchored in the frame of the bulk's way W),
-// and builds again past kReboxedShare of the mesh or after
-// CollisionSettings::self_collision_interval substeps.
+// primitives of the particles that left it (each re-anchored on the path of its motion
+// now), and builds again past kReboxedShare of the mesh or past the horizon.
 #pragma once
 
 #include <cstddef>
@@ -105,14 +117,18 @@ struct SelfCollisionSettings {
   /// update() builds again when this changes; refine() finds edge–edge contacts only among
   /// the candidates of a detection that had it on.
   bool edge_edge = true;
-  /// The substeps a detection's candidates are meant to last at the particles' speeds
-  /// (see "Reusing a detection" above): each particle's budget is 2 k |Δ − ū| + skin, ū the
-  /// median motion. ≥ 1.
+  /// The substeps of change of motion a particle's room is meant to last (see "Reusing a
+  /// detection" above): each particle's budget is skin + k (k + 1) |Δ − Δ_prev|, Δ_prev its
+  /// motion of the call before. ≥ 1.
   Real motion_scale = 1;
-  /// Distance every particle may move (relative to the median) before covers() fails, on top
-  /// of its motion_scale substeps of motion. ≥ 0. Larger: more candidates to refine per
+  /// Distance every particle may stray from its path before covers() fails, on top of its
+  /// motion_scale substeps of change of motion. ≥ 0. Larger: more candidates to refine per
   /// substep, fewer detections.
   Real skin = 0;
+  /// The substeps after a detection its candidates serve: update() builds again after this
+  /// many. Each candidate pair's distance allows for (horizon + 1) substeps of the relative
+  /// motion of the pair's paths. ≥ 0.
+  std::size_t horizon = 8;
 };
 
 /// The particle arrays detection reads (SoA): predicted positions x, y, z and the positions
@@ -169,10 +185,11 @@ class SelfCollision {
     detect(SelfCollisionPositions::of(state), settings, out);
   }
 
-  /// The contacts of this substep among the candidates the last detect() found: each pair
-  /// tested again by the contact rule at `positions` (start and predicted), in the same
-  /// order. While covers(positions) holds, this is the list a detection of its own would
-  /// give. Same errors as detect().
+  /// The contacts of the next substep among the candidates the last detect() found: each
+  /// pair tested again by the contact rule at `positions` (start and predicted), in the
+  /// same order. While covers(positions) holds, this is the list a detection of its own
+  /// would give. Each call is one substep on the particles' paths (they stop at the
+  /// horizon). Same errors as detect().
   void refine(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings,
               Contacts& out);
   void refine(const ParticleState& state, const SelfCollisionSettings& settings, Contacts& out) {
@@ -198,10 +215,11 @@ class SelfCollision {
   /// between a tenth and a fifth (docs/performance.md).
   static constexpr double kReboxedShare = 0.1;
 
-  /// Whether the last detection's candidates still hold every contact at `positions`: each
-  /// particle's way since the detection (relative to the median way) and its motion over
-  /// this substep (relative to the median motion) are each within half its budget. False
-  /// before any detection or for another particle count.
+  /// Whether the last detection's candidates still hold every contact at `positions`, taken
+  /// as the substep after the last detect(), update() or refine(): that substep is within
+  /// the horizon, and each particle's distance from its path (in the frame of the bulk's way)
+  /// and its motion against its path's are each within half its budget. False before any
+  /// detection or for another particle count.
   bool covers(const SelfCollisionPositions& positions);
   bool covers(const ParticleState& state) { return covers(SelfCollisionPositions::of(state)); }
 
@@ -223,10 +241,11 @@ class SelfCollision {
   struct Pair {
     std::uint32_t first, second;
   };
-  /// A candidate pair and the distance of its primitives at their anchors.
+  /// A candidate pair and the least the distance of its primitives' references can be over
+  /// the horizon, less one substep of their relative motion: d_c − (T − τ_c + 1) ρ.
   struct Candidate {
     std::uint32_t first, second;
-    Real anchor_distance;
+    Real bound;
   };
   /// How far a particle has left its room this substep: its way since it was anchored
   /// (w, in the frame) and its motion against the bulk's (m).
@@ -236,10 +255,12 @@ class SelfCollision {
   struct Reach {
     Real distance;  // thickness + margin
   };
-  /// The bulk's motion and way since the last build (medians): the frame the anchors live in.
+  /// The bulk's motion and way since the last build (medians), and the substep since the
+  /// build: the frame the paths live in.
   struct Frame {
     Vector3r way;
     Vector3r motion;
+    Real substep = 0;
   };
   void check(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings) const;
   /// Each particle's motion over the substep, into motion_ (scratch of every call).
@@ -249,8 +270,19 @@ class SelfCollision {
                        const SelfCollisionSettings& settings);
   Vector3r bulk_motion();
   Frame frame(const SelfCollisionPositions& positions);
-  /// Particle i's budget: 2 k |Δ − ū| + skin.
-  Real budget_of(std::uint32_t i, const Vector3r& bulk, const SelfCollisionSettings& settings) const;
+  /// Particle i anchored on a path at this substep: its velocity V = Δ − bulk, its virtual
+  /// anchor A = start − way − τ V (so that R(τ) = A + τ V is its start less the way) and its
+  /// budget skin + k (k + 1) |Δ − Δ_prev| (skin alone without a previous motion).
+  void anchor_on_path(std::uint32_t i, const Frame& frame, const SelfCollisionPositions& positions,
+                      const SelfCollisionSettings& settings);
+  /// The substeps left in the horizon, plus one: the relative motions a pair tested now
+  /// allows for.
+  Real substeps_allowed() const { return Real(horizon_ - substep_ + 1); }
+  /// Every particle's reference at this substep (A + τ V), and every record from them.
+  void refresh_references(const SelfCollisionSettings& settings);
+  /// The ball of particles `ids`' velocities: their mean and the largest distance from it.
+  template <std::size_t N>
+  void velocity_ball(const std::uint32_t (&ids)[N], Real (&centre)[3], Real& radius) const;
   /// Particle i's departure from its room under `frame`, both parts squared.
   Departure squared_departure(std::uint32_t i, const Frame& frame,
                               const SelfCollisionPositions& positions) const;
@@ -306,10 +338,16 @@ class SelfCollision {
   std::vector<std::uint32_t> triangles_;
   std::vector<std::uint32_t> edges_;
   // Buffers reused across detections.
-  std::vector<Vector3r> motion_;        // predicted − previous per particle
-  std::vector<Real> budget_;            // per particle, set when it was anchored
-  std::vector<Vector3r> anchor_;        // per particle, in the frame (start − bulk way then)
+  std::vector<Vector3r> motion_;           // predicted − previous per particle
+  std::vector<Vector3r> previous_motion_;  // the motion of the last detect/update/refine
+  std::vector<Real> budget_;               // per particle, set when it was anchored
+  // Each particle's path: R(τ) = anchor + τ velocity (in the frame: start − bulk way), set
+  // when it was anchored; its speed |velocity|; its reference at the last build or re-box.
+  std::vector<Vector3r> anchor_, velocity_, reference_;
+  std::vector<Real> speed_;
   std::vector<Vector3r> frame_origin_;  // start positions at the last build
+  std::size_t substep_ = 0;             // τ: substeps since the last build
+  std::size_t horizon_ = 0;             // T of the last build
   std::vector<Real> scratch_;           // the medians' copies
   // Incidence: each vertex's triangles and edges (CSR).
   std::vector<std::uint32_t> vertex_triangle_start_, vertex_triangles_;
@@ -333,16 +371,18 @@ class SelfCollision {
   static constexpr Real kAllowancePerCoordinate = Real(1e-5);
   std::size_t measured_candidates_ = 0;
   std::vector<Aabb> vertex_boxes_, triangle_boxes_, edge_boxes_;
-  /// Each edge's anchors and larger budget, as the build's edge–edge queries read them (one
-  /// record, half a cache line in float, per edge met).
-  struct alignas(8 * sizeof(Real)) EdgeAnchors {
-    Real p[3], q[3], budget, unused;
+  /// Each edge's references and larger budget, and the ball of its corners' velocities
+  /// (centre, radius), as the build's edge–edge queries read them (one record, 48 bytes in
+  /// float, per edge met).
+  struct alignas(4 * sizeof(Real)) EdgeAnchors {
+    Real p[3], q[3], budget, radius, centre[3], unused;
   };
   std::vector<EdgeAnchors> edge_anchors_;
   bool built_with_edge_edge_ = false;  // the last build's SelfCollisionSettings::edge_edge
-  /// Each triangle's anchors (a, b, c) and largest budget, as the vertex queries read them.
+  /// Each triangle's references (a, b, c), largest budget and the ball of its corners'
+  /// velocities, as the vertex queries read them.
   struct alignas(4 * sizeof(Real)) TriangleAnchors {
-    Real corner[3][3], budget;
+    Real corner[3][3], budget, radius, centre[3], unused[2];
   };
   std::vector<TriangleAnchors> triangle_anchors_;
   UniformGrid triangle_grid_, edge_grid_;

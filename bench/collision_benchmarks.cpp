@@ -19,16 +19,19 @@
 //   collision/reference/distance_sweep/cloth128/threads:<T>   one gs projection sweep of the
 //       128² distance cloth: the yardstick of the detection's budget (about two sweeps)
 //   collision/stage_detect/pile/threads:<T>   CollisionStage::detect on the pile scene
-//       (`tessera run pile`, 8 FEM blocks, 1,152 particles) at frame 40, blocks lying on
-//       each other and the ground: collider contacts, self-collision pairs, their split into
-//       particle–tet contacts, the batches; counters particle_tet, collider, edge_edge
+//       (`tessera run pile`, 8 FEM blocks, 1,152 particles) from frame 40, blocks lying on
+//       each other and the ground, its 64 substeps replayed as the drape's below: collider
+//       contacts, self-collision pairs, their split into particle–tet contacts, the
+//       batches; counters particle_tet, collider, edge_edge
 //   collision/reference/sweep/pile/threads:<T>   one gs sweep of the pile's FEM tetrahedra
 //       and that substep's contacts, the yardstick for the pile
 //   collision/stage_detect/drape/threads:<T>   CollisionStage::detect on the drape scene
-//       (`tessera run drape`, 128² cloth, self-collision, sphere and ground) at frame 60, the
-//       cloth in folds on the sphere, called once per iteration: a grid build every
-//       self_collision_interval-th call (8), the others filtering its candidates; the
-//       issue's budget is two of the sweeps below
+//       (`tessera run drape`, 128² cloth, self-collision, sphere and ground) from frame 60,
+//       the cloth in folds on the sphere: the 64 substeps that follow, recorded, replayed in
+//       order, one per iteration, as a run meets them (a grid build at least every
+//       self_collision_interval-th substep, 4, the others filtering its candidates or
+//       re-boxing what strayed from its path; the replay's wrap-around is one more build in
+//       64); the budget is two of the sweeps below
 //   collision/reference/sweep/drape/threads:<T>   one gs sweep of the drape's cloth and that
 //       substep's contacts (a substep's projection: the scene runs 1 iteration)
 //
@@ -245,6 +248,33 @@ struct SettledScene {
     }
   }
   Real substep() const { return settings.time_step / Real(settings.substeps); }
+  /// The `count` substeps that follow the settled state, each as a detection meets it: the
+  /// start of the substep as previous, its end as the positions (the solver's own
+  /// prediction differs by the substep's corrections).
+  std::vector<ParticleState> substeps_after(std::size_t count) const {
+    SolverSettings one = settings;
+    one.time_step = substep();
+    one.substeps = 1;
+    Solver solver = solver_at(one);
+    for (std::size_t i = 0; i < state.size(); ++i) {
+      solver.set_position(ParticleIndex(i), state.position(i));
+      solver.set_velocity(ParticleIndex(i), state.velocity(i));
+    }
+    std::vector<ParticleState> sequence;
+    std::vector<Vector3r> start = solver.positions();
+    const auto masses = scene.model.particles.inverse_mass.begin();
+    for (std::size_t k = 0; k < count; ++k) {
+      solver.step();
+      const std::vector<Vector3r> end = solver.positions();
+      ParticleState substep_state(end, std::vector<Real>(masses, masses + std::ptrdiff_t(end.size())));
+      for (std::size_t i = 0; i < end.size(); ++i)
+        substep_state.previous_x[i] = start[i].x(), substep_state.previous_y[i] = start[i].y(),
+        substep_state.previous_z[i] = start[i].z();
+      sequence.push_back(std::move(substep_state));
+      start = end;
+    }
+    return sequence;
+  }
   /// A solver of the scene with its collisions, at the start or at the settled state.
   Solver solver_at(const SolverSettings& with) const {
     Solver solver = test::make_solver(scene.model, with, "stencil");
@@ -264,17 +294,33 @@ const SettledScene& settled_drape() {
   return drape;
 }
 
-/// One substep's detection as a run makes it: a stage called once per iteration, so the
-/// self-collision grids are built every self_collision_interval-th call and the other calls
-/// filter their candidates.
-void run_stage_detect(benchmark::State& state, const SettledScene& settled) {
+/// The 64 substeps after the settled frames.
+const std::vector<ParticleState>& drape_substeps() {
+  static const std::vector<ParticleState> sequence = settled_drape().substeps_after(64);
+  return sequence;
+}
+const std::vector<ParticleState>& pile_substeps() {
+  static const std::vector<ParticleState> sequence = settled_pile().substeps_after(64);
+  return sequence;
+}
+
+/// One substep's detection as a run makes it: a stage called once per iteration on the
+/// states of `sequence` in turn, so the self-collision grids are built every
+/// self_collision_interval-th call at the latest and the other calls filter their
+/// candidates or re-box.
+void run_stage_detect(benchmark::State& state, const SettledScene& settled,
+                      const std::vector<ParticleState>& sequence) {
   in_arena(state, [&] {
     CollisionStage stage(settled.collisions,
                          std::vector<std::uint32_t>(settled.scene.surface_triangles.begin(),
                                                     settled.scene.surface_triangles.end()),
                          settled.state.size(), settled.scene.mesh.tetrahedra);
     ConstraintSets contacts;
-    for (auto _ : state) stage.detect(settled.state, settled.substep(), Real(9.81), contacts);
+    std::size_t next = 0;
+    for (auto _ : state) {
+      const ParticleState& at = sequence[next++ % sequence.size()];
+      stage.detect(at, settled.substep(), Real(9.81), contacts);
+    }
     state.counters["particle_tet"] = double(contacts.particle_tet_contact.size());
     state.counters["collider"] = double(contacts.collider_contact.size());
     state.counters["triangle_point"] = double(contacts.triangle_point_distance.size());
@@ -298,7 +344,9 @@ void run_sweep(benchmark::State& state, const SettledScene& settled) {
                                                             solver.contacts().size()));
 }
 
-void BM_PileDetect(benchmark::State& state) { run_stage_detect(state, settled_pile()); }
+void BM_PileDetect(benchmark::State& state) {
+  run_stage_detect(state, settled_pile(), pile_substeps());
+}
 BENCHMARK(BM_PileDetect)->Name("collision/stage_detect/pile")
     ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
@@ -306,7 +354,9 @@ void BM_PileSweep(benchmark::State& state) { run_sweep(state, settled_pile()); }
 BENCHMARK(BM_PileSweep)->Name("collision/reference/sweep/pile")
     ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 
-void BM_DrapeDetect(benchmark::State& state) { run_stage_detect(state, settled_drape()); }
+void BM_DrapeDetect(benchmark::State& state) {
+  run_stage_detect(state, settled_drape(), drape_substeps());
+}
 BENCHMARK(BM_DrapeDetect)->Name("collision/stage_detect/drape")
     ->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
 

@@ -434,6 +434,20 @@ void SelfCollision::anchor_on_path(std::uint32_t i, const Frame& frame,
   budget_[i] = settings.skin + k * (k + 1) * change;
 }
 
+std::size_t SelfCollision::horizon_for(Real reach, const SelfCollisionSettings& settings) {
+  // The horizon's cost is what the paths may close over it (each pair allows T ρ, each box
+  // is swept T |V| long); its gain, builds T substeps apart. Past a share of the reach the
+  // first outgrows the second (measured: docs/performance.md, "Paths"), so T is that share
+  // over the fast particles' speed (the 90th percentile of |V|), at most the setting's.
+  if (settings.horizon <= 1 || particle_count_ == 0) return settings.horizon;
+  scratch_.assign(speed_.begin(), speed_.end());
+  const auto at = scratch_.begin() + std::ptrdiff_t(scratch_.size() * 9 / 10);
+  std::nth_element(scratch_.begin(), at, scratch_.end());
+  const Real fast = *at, closing = kHorizonReachShare * reach;
+  if (!(fast * Real(settings.horizon) > closing)) return settings.horizon;
+  return std::max<std::size_t>(1, std::size_t(closing / fast));
+}
+
 void SelfCollision::refresh_references(const SelfCollisionSettings& settings) {
   const Real tau = Real(substep_);
   parallel_over(particle_count_,
@@ -588,7 +602,6 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   // origin (covers()).
   const Vector3r bulk = bulk_motion();
   substep_ = 0;
-  horizon_ = settings.horizon;
   for (auto* v : {&anchor_, &velocity_, &reference_, &frame_origin_}) v->resize(particle_count_);
   budget_.resize(particle_count_);
   speed_.resize(particle_count_);
@@ -597,6 +610,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
     reference_[i] = anchor_[i];
     frame_origin_[i] = particles.start(std::uint32_t(i));
   });
+  horizon_ = horizon_for(reach, settings);
   reboxed_triangle_.assign(triangle_count, 0);
   reboxed_edge_.assign(edge_count, 0);
   reboxed_triangles_.clear();

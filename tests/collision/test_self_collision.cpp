@@ -465,12 +465,14 @@ TEST(SelfCollision, AFoldedClothHasExactlyTheBruteForceContacts) {
 }
 
 TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContacts) {
-  // The folded cloth's top layer moves down at a constant 0.2 h per substep. A detection puts
-  // each particle on the path of its motion, so with a skin of 0.01 h for rounding it still
-  // covers each of the next four substeps of the same motion, and refined there lists what a
+  // The folded cloth's top layer moves down at a constant 0.05 h per substep. A detection
+  // puts each particle on the path of its motion, so with a skin of 0.01 h for rounding it
+  // still covers each of the next four substeps of the same motion (the horizon: at that
+  // speed the paths close 3/4 of the reach in 7 substeps), and refined there lists what a
   // detection at that substep finds (and no more).
   FoldedCloth cloth(24);
   ParticleState& s = cloth.state;
+  for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i] + (s.previous_y[i] - s.y[i]) / 4;
   SelfCollision once(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
   SelfCollisionSettings settings{Real(0.4) * cloth.spacing(), Real(0.1) * cloth.spacing()};
   settings.skin = Real(0.01) * cloth.spacing();
@@ -503,6 +505,44 @@ TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContac
   EXPECT_GT(once.candidate_count(), direct.triangle_point_count() + direct.edge_edge_count());
   next_substep();
   EXPECT_FALSE(once.covers(s)) << "past the horizon";
+}
+
+TEST(SelfCollision, TheHorizonShortensForFastPathsAndUpdatesStayExact) {
+  // The top layer moving down at a constant speed, horizon at most 8. At 0.02 h per substep
+  // the paths close 3/4 of the reach (0.5 h) in 18 substeps: a build serves all 8 substeps
+  // after it. At 0.2 h per substep they close it in 1.9: a build every second substep, the
+  // substep between refined. Every update lists exactly a detection's contacts.
+  for (const Real speed : {Real(0.02), Real(0.2)}) {
+    FoldedCloth cloth(24);
+    ParticleState& s = cloth.state;
+    const Real h = cloth.spacing();
+    for (std::size_t i = 0; i < s.size(); ++i)
+      if (s.previous_y[i] != s.y[i]) s.previous_y[i] = s.y[i] + speed * h;
+    SelfCollision updated(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
+    SelfCollisionSettings settings{Real(0.4) * h, Real(0.1) * h};
+    settings.skin = Real(0.01) * h;
+    settings.horizon = 8;
+    Contacts by_update, direct;
+    std::vector<SelfCollision::Update> done;
+    for (int substep = 0; substep < 10; ++substep) {
+      done.push_back(updated.update(s, settings, by_update));
+      every.detect(s, settings, direct);
+      EXPECT_EQ(by_update.triangle_point, direct.triangle_point) << speed << " " << substep;
+      EXPECT_EQ(by_update.edge_edge, direct.edge_edge) << speed << " " << substep;
+      for (std::size_t i = 0; i < s.size(); ++i) {
+        const Real step = s.y[i] - s.previous_y[i];
+        s.previous_y[i] = s.y[i];
+        s.y[i] += step;
+      }
+    }
+    using U = SelfCollision::Update;
+    const std::vector<U> expected =
+        speed < Real(0.1) ? std::vector<U>{U::built, U::refined, U::refined, U::refined, U::refined,
+                                           U::refined, U::refined, U::refined, U::refined, U::built}
+                          : std::vector<U>{U::built, U::refined, U::built, U::refined, U::built,
+                                           U::refined, U::built, U::refined, U::built, U::refined};
+    EXPECT_EQ(done, expected) << speed;
+  }
 }
 
 TEST(SelfCollision, AParticleOffItsPathIsNotCoveredThoughItMovesLikeTheBulk) {

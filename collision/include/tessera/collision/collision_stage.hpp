@@ -43,27 +43,32 @@ inline constexpr Real kDefaultStaticFriction = Real(0.4);
 inline constexpr Real kDefaultDynamicFriction = Real(0.3);
 /// The most substeps between self-collision grid builds (CollisionSettings::
 /// self_collision_interval). A build puts each particle on the straight path of its motion
-/// and lists the candidate pairs whose paths can come within reach before the next build
-/// (interval − 1 substeps on: SelfCollisionSettings::horizon), with room for each particle
-/// to stray from its path (kSelfCollisionMotionSubsteps substeps of the change of its
-/// motion, plus kSelfCollisionSkin thicknesses); every substep until the next build tests
-/// them at its own positions, and a particle that has strayed beyond its room gets its
-/// primitives re-boxed (SelfCollision::update; a full build when they pass
-/// SelfCollision::kReboxedShare of the mesh). So the contacts are exactly those of a
-/// detection every substep: every setting below ends the drape on the same state_hash, only
-/// the cost moves. Detection seconds, 128² drape, 30 frames, 1 thread, Zen 3 VM, two runs
-/// each (single runs differ by up to 10 %):
+/// and lists the candidate pairs whose paths can come within reach before its horizon: the
+/// substeps in which its fast particles close SelfCollision::kHorizonReachShare of the reach,
+/// at most interval − 1 (SelfCollisionSettings::horizon). Each particle has room to stray
+/// from its path (kSelfCollisionMotionSubsteps substeps of the change of its motion, plus
+/// kSelfCollisionSkin thicknesses); every substep until the next build tests the candidates
+/// at its own positions, and a particle that has strayed beyond its room gets its primitives
+/// re-boxed (SelfCollision::update; a full build when they pass SelfCollision::kReboxedShare
+/// of the mesh). So the contacts are exactly those of a detection every substep: every
+/// setting below ends the drape and the pile on the same state_hash, only the cost moves.
+/// Detection seconds, 1 thread, Zen 3 VM, one run each (runs differ by up to 10 %); the
+/// drape 30 frames, the pile 90:
 ///
-///   interval                 4 (the default)   3             5             8
-///                            13.6 / 14.8 s     14.5 / 16.0   14.8 / 14.9   16.2
-///   room (substeps, skin)    2, 0.1 (default)  1.5, 0.1      3, 0.1        2, 0.05 / 2, 0.2
-///                            as above          14.5 / 15.3   14.1 / 14.5   14.8–15.7 / 13.7–15.1
+///   horizon                                  drape 30 frames    pile
+///   fixed 3 (interval 4)                     13.6–14.8 s        1.03 s (725 builds)
+///   0.75 of the reach, at most 15 (default)  12.9 s             0.81 s (232 builds)
+///   0.5 / 1 of the reach, at most 15         14.8 / 13.4 s      0.78 / 0.80 s
+///   0.75 of the reach, at most 31            12.8 s             0.82 s
+///   room (substeps, skin) 1.5, 0.1 / 3, 0.1 / 2, 0.05 / 2, 0.2 (horizon 3): drape 14.5–15.3,
+///   14.1–14.5, 14.8–15.7, 13.7–15.1 s against 13.6–14.8 s for 2, 0.1 (the default)
 ///
-/// A longer interval lists more candidates (each pair allows for interval substeps of its
-/// paths' relative motion, and the boxes are swept along the paths): 16 and 32 substeps took
-/// 28 s and 47 s. Before the paths, with one frame moving at the cloth's median motion, the
-/// same run took 23.6–27.3 s (docs/performance.md, "Paths").
-inline constexpr std::size_t kDefaultSelfCollisionInterval = 4;
+/// A fixed long horizon lists more candidates on the drape (each pair allows for horizon
+/// substeps of its paths' relative motion, and the boxes are swept along the paths): 15 and
+/// 31 substeps took 28 s and 47 s; the pile, whose paths barely diverge, wants a long one.
+/// Before the paths, with one frame moving at the cloth's median motion, the drape took
+/// 23.6–27.3 s and the pile 0.82–0.85 s (docs/performance.md, "Paths").
+inline constexpr std::size_t kDefaultSelfCollisionInterval = 16;
 inline constexpr std::size_t kSelfCollisionMotionSubsteps = 2;
 inline constexpr Real kSelfCollisionSkin = Real(0.1);
 

@@ -125,9 +125,10 @@ struct SelfCollisionSettings {
   /// motion_scale substeps of change of motion. ≥ 0. Larger: more candidates to refine per
   /// substep, fewer detections.
   Real skin = 0;
-  /// The substeps after a detection its candidates serve: update() builds again after this
-  /// many. Each candidate pair's distance allows for (horizon + 1) substeps of the relative
-  /// motion of the pair's paths. ≥ 0.
+  /// The most substeps after a detection its candidates serve: update() builds again after
+  /// that many. A build shortens it to the substeps in which its fast particles (the 90th
+  /// percentile of |V|) close kHorizonReachShare of the reach: each candidate pair's distance
+  /// allows for (horizon + 1) substeps of the relative motion of the pair's paths. ≥ 0.
   std::size_t horizon = 8;
 };
 
@@ -278,6 +279,10 @@ class SelfCollision {
   /// The substeps left in the horizon, plus one: the relative motions a pair tested now
   /// allows for.
   Real substeps_allowed() const { return Real(horizon_ - substep_ + 1); }
+  /// The horizon of a build whose particles are on their paths: the substeps in which the
+  /// fast ones close kHorizonReachShare of the reach, at most settings.horizon.
+  std::size_t horizon_for(Real reach, const SelfCollisionSettings& settings);
+  static constexpr Real kHorizonReachShare = Real(0.75);
   /// Every particle's reference at this substep (A + τ V), and every record from them.
   void refresh_references(const SelfCollisionSettings& settings);
   /// The ball of particles `ids`' velocities: their mean and the largest distance from it.

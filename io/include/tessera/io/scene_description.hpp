@@ -105,7 +105,7 @@ struct CollisionDescription {
   bool self_collision = false;
   /// The most substeps between self-collision grid builds, each other substep refining their
   /// candidates (CollisionSettings::self_collision_interval; its default, kDefaultSelfCollisionInterval).
-  std::size_t self_collision_interval = 4;
+  std::size_t self_collision_interval = 16;
 
   bool enabled() const { return self_collision || !colliders.empty(); }
 };

@@ -41,7 +41,7 @@
 //     "thickness": 0.005,                    // contact distance (m)
 //     "friction": 0.4, "dynamic_friction": 0.3,  // "friction" sets both, then the other wins
 //     "restitution": 0, "self_collision": false,
-//     "self_collision_interval": 4           // most substeps between self-collision grid builds
+//     "self_collision_interval": 16          // most substeps between self-collision grid builds
 //   }
 //
 // What the pin rules pick is said with PinRule (scene_description.hpp).

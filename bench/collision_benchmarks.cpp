@@ -8,9 +8,9 @@
 //       triangle_point and edge_edge (contacts found)
 //   collision/self_detect_vertex_triangle/folded128/threads:<T>   the same without edge–edge
 //       contacts (SelfCollisionSettings::edge_edge = false)
-//   collision/self_refine/folded128/threads:<T>   SelfCollision::refine after a detection
-//       reaching 4 substeps' motion: the per-substep cost between detections with
-//       self_collision_interval = 4 (the candidates tested again, no grid)
+//   collision/self_refine/folded128/threads:<T>   SelfCollision::refine of the substep after
+//       a detection, at the positions its motion reaches: the per-substep cost between
+//       detections (the candidates tested again, no grid); counter candidates
 //   collision/broad_vertices/folded128/threads:<T>    the grid's candidate pairs of the vertices
 //       as points within 2r (r = thickness + margin): build + self_pairs
 //   collision/broad_triangles/folded128/threads:<T>   the same for the triangles' boxes grown by
@@ -131,12 +131,16 @@ void BM_SelfRefine(benchmark::State& state) {
   in_arena(state, [&] {
     SelfCollision collision(cloth.grid.triangle_indices, cloth.state.size());
     SelfCollision::Contacts contacts;
-    settings.motion_scale = 4;
+    settings.horizon = 1;  // refine() then stays at the substep after the detection
     collision.detect(cloth.state, settings, contacts);
-    const double candidates = double(contacts.triangle_point_count() + contacts.edge_edge_count());
-    settings.motion_scale = 1;
-    for (auto _ : state) collision.refine(cloth.state, settings, contacts);
-    state.counters["candidates"] = candidates;
+    ParticleState next = cloth.state;  // one more substep of the same motion
+    for (std::size_t i = 0; i < next.size(); ++i) {
+      const Real step = next.y[i] - next.previous_y[i];
+      next.previous_y[i] = next.y[i];
+      next.y[i] += step;
+    }
+    for (auto _ : state) collision.refine(next, settings, contacts);
+    state.counters["candidates"] = double(collision.candidate_count());
     state.counters["contacts"] = double(contacts.triangle_point_count() + contacts.edge_edge_count());
   });
 }

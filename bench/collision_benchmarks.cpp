@@ -28,10 +28,10 @@
 //   collision/stage_detect/drape/threads:<T>   CollisionStage::detect on the drape scene
 //       (`tessera run drape`, 128² cloth, self-collision, sphere and ground) from frame 60,
 //       the cloth in folds on the sphere: the 64 substeps that follow, recorded, replayed in
-//       order, one per iteration, as a run meets them (a grid build at least every
-//       self_collision_interval-th substep, 4, the others filtering its candidates or
-//       re-boxing what strayed from its path; the replay's wrap-around is one more build in
-//       64); the budget is two of the sweeps below
+//       order, one per iteration, as a run meets them (a grid build at the end of each
+//       build's horizon, about every 4th substep here, the others filtering its candidates
+//       or re-boxing what strayed from its path; the replay's wrap-around is one more build
+//       in 64); the budget is two of the sweeps below
 //   collision/reference/sweep/drape/threads:<T>   one gs sweep of the drape's cloth and that
 //       substep's contacts (a substep's projection: the scene runs 1 iteration)
 //

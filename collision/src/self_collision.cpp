@@ -439,12 +439,13 @@ std::size_t SelfCollision::horizon_for(Real reach, const SelfCollisionSettings& 
   // is swept T |V| long); its gain, builds T substeps apart. Past a share of the reach the
   // first outgrows the second (measured: docs/performance.md, "Paths"), so T is that share
   // over the fast particles' speed (the 90th percentile of |V|), at most the setting's.
-  if (settings.horizon <= 1 || particle_count_ == 0) return settings.horizon;
+  const std::size_t longest = std::min(settings.horizon, kLongestHorizon);
+  if (longest <= 1 || particle_count_ == 0) return longest;
   scratch_.assign(speed_.begin(), speed_.end());
   const auto at = scratch_.begin() + std::ptrdiff_t(scratch_.size() * 9 / 10);
   std::nth_element(scratch_.begin(), at, scratch_.end());
   const Real fast = *at, closing = kHorizonReachShare * reach;
-  if (!(fast * Real(settings.horizon) > closing)) return settings.horizon;
+  if (!(fast * Real(longest) > closing)) return longest;
   return std::max<std::size_t>(1, std::size_t(closing / fast));
 }
 
@@ -602,6 +603,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   // origin (covers()).
   const Vector3r bulk = bulk_motion();
   substep_ = 0;
+  built_reach_ = reach;
   for (auto* v : {&anchor_, &velocity_, &reference_, &frame_origin_}) v->resize(particle_count_);
   budget_.resize(particle_count_);
   speed_.resize(particle_count_);
@@ -721,9 +723,11 @@ SelfCollision::Update SelfCollision::update(const SelfCollisionPositions& positi
                                             const SelfCollisionSettings& settings,
                                             Contacts& out) {
   check(positions, settings);
-  // Before any detection, or when edge–edge contacts were switched since the last one (its
-  // edge grid, records and candidates are those of the other setting): a build.
-  if (anchor_.size() != particle_count_ || settings.edge_edge != built_with_edge_edge_) {
+  // Before any detection, when edge–edge contacts were switched since the last one (its edge
+  // grid, records and candidates are those of the other setting), or when the reach grew
+  // (its candidates were chosen for a shorter one): a build.
+  if (anchor_.size() != particle_count_ || settings.edge_edge != built_with_edge_edge_ ||
+      settings.thickness + settings.margin > built_reach_) {
     detect(positions, settings, out);
     return Update::built;
   }

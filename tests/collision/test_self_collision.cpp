@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <string>
 #include <random>
 #include <numbers>
 #include <vector>
@@ -543,6 +545,165 @@ TEST(SelfCollision, TheHorizonShortensForFastPathsAndUpdatesStayExact) {
                                            U::refined, U::built, U::refined, U::built, U::refined};
     EXPECT_EQ(done, expected) << speed;
   }
+}
+
+TEST(SelfCollision, AHorizonSetPastAnyUseIsCappedAndDetectionStaysExact) {
+  // 90 % of the cloth at rest, so a build keeps the horizon setting (its fast particles'
+  // speed is 0), and a patch of the upper layer diving at 0.2 h per substep. Whatever the
+  // setting, up to the largest size_t, a detection lists what the brute-force loop lists.
+  // (Before the cap, horizon + 1 wrapped to 0 at the largest: no allowance for the paths,
+  // contacts lost.)
+  for (const std::size_t horizon :
+       {std::size_t(16), std::size_t(1) << 20, std::numeric_limits<std::size_t>::max()}) {
+    FoldedCloth cloth(24);
+    ParticleState& s = cloth.state;
+    const Real h = cloth.spacing();
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const bool patch = s.y[i] > Real(0.5) * h && s.x[i] < Real(0.3) && s.z[i] > Real(0.4) &&
+                         s.z[i] < Real(0.6);
+      s.previous_y[i] = patch ? s.y[i] + Real(0.2) * h : s.y[i];
+    }
+    SelfCollision collision(cloth.grid.triangle_indices, s.size());
+    SelfCollisionSettings settings{Real(0.4) * h, Real(0.1) * h};
+    settings.skin = Real(0.01) * h;
+    settings.horizon = horizon;
+    Contacts contacts;
+    collision.detect(s, settings, contacts);
+    const Contacts expected = brute_force(cloth, collision, settings.thickness + settings.margin);
+    EXPECT_GT(expected.triangle_point_count(), 0u) << horizon;
+    EXPECT_EQ(contacts.triangle_point, expected.triangle_point) << horizon;
+    EXPECT_EQ(contacts.edge_edge, expected.edge_edge) << horizon;
+  }
+}
+
+TEST(SelfCollision, UpdateBuildsAgainWhenTheReachGrows) {
+  // The folded cloth at rest; the margin grows from 0.05 h to 0.2 h between two updates. The
+  // first build's candidates were chosen for the shorter reach: the second update builds
+  // and lists a detection's contacts (before: 0 + 9 where a detection finds 3 + 36).
+  FoldedCloth cloth(24);
+  ParticleState& s = cloth.state;
+  const Real h = cloth.spacing();
+  for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i];
+  SelfCollision updated(cloth.grid.triangle_indices, s.size()), fresh(cloth.grid.triangle_indices, s.size());
+  SelfCollisionSettings settings{Real(0.3) * h, Real(0.05) * h};
+  settings.skin = Real(0.01) * h;
+  Contacts by_update, direct;
+  EXPECT_EQ(updated.update(s, settings, by_update), SelfCollision::Update::built);
+  EXPECT_EQ(updated.update(s, settings, by_update), SelfCollision::Update::refined);
+  settings.margin = Real(0.2) * h;
+  EXPECT_EQ(updated.update(s, settings, by_update), SelfCollision::Update::built);
+  fresh.detect(s, settings, direct);
+  EXPECT_GT(direct.triangle_point_count(), 0u);
+  EXPECT_EQ(by_update.triangle_point, direct.triangle_point);
+  EXPECT_EQ(by_update.edge_edge, direct.edge_edge);
+  settings.margin = Real(0.1) * h;  // a shorter reach keeps the candidates: a superset
+  EXPECT_EQ(updated.update(s, settings, by_update), SelfCollision::Update::refined);
+  fresh.detect(s, settings, direct);
+  EXPECT_EQ(by_update.triangle_point, direct.triangle_point);
+  EXPECT_EQ(by_update.edge_edge, direct.edge_edge);
+}
+
+/// The folded cloth's particles on prescribed trajectories: the bulk drifting and falling,
+/// the lower layer still, and two patches of the upper layer (three with `third_patch`)
+/// whose particles go straight, curve, stop, reverse or speed up, by a hash of the particle
+/// (kind 0) or all alike (kind 1: curving). Substep k's start is the trajectory at k, its
+/// prediction the trajectory at k + 1 plus a little noise (3·10⁻⁴ h), and with `kicks` one
+/// particle in about 97 kicked by up to 0.15 h.
+struct PrescribedPaths {
+  FoldedCloth cloth;
+  std::vector<Vector3r> rest;
+  Real h;
+  explicit PrescribedPaths(std::size_t n) : cloth(n), h(cloth.spacing()) {
+    for (std::size_t i = 0; i < cloth.state.size(); ++i) rest.push_back(cloth.state.position(i));
+  }
+  Vector3r at(std::size_t i, Real k, int kind, bool third_patch) const {
+    const Vector3r& p = rest[i];
+    const Vector3r bulk(Real(0.05) * h * k, Real(-0.002) * h * k * k, Real(0.01) * h * k);
+    const auto near = [&](Real cx, Real cz, Real size) {
+      return std::abs(p.x() - cx) < size && std::abs(p.z() - cz) < size;
+    };
+    const bool upper = p.y() > Real(0.4) * h;
+    const bool patch = near(Real(0.2), Real(0.3), Real(0.12)) || near(Real(0.35), Real(0.75), Real(0.1)) ||
+                       (third_patch && near(Real(0.1), Real(0.55), Real(0.1)));
+    if (!upper || !patch) return p + bulk;
+    const Real phase = Real(7) * p.x() + Real(5) * p.z();
+    const std::uint32_t hash = std::uint32_t(i) * 2654435761u;
+    const Real speed = Real(0.04) * h * (1 + Real(0.5) * std::sin(phase));
+    const Real turn = Real(3) + Real((hash >> 8) % 7);  // when it stops or reverses
+    Vector3r own = Vector3r::Zero();
+    switch (kind == 0 ? int((hash >> 16) % 5) : 1) {
+      case 0: own.y() = -speed * k; break;
+      case 1: {
+        const Real w = Real(0.4) + Real(0.3) * std::sin(phase);
+        own = Real(0.3) * h * Vector3r(std::cos(w * k + phase) - std::cos(phase), Real(-0.1) * k,
+                                       std::sin(w * k + phase) - std::sin(phase));
+        break;
+      }
+      case 2: own.y() = -speed * std::min(k, turn); break;
+      case 3: own.y() = k < turn ? -speed * k : -speed * turn + Real(1.5) * speed * (k - turn); break;
+      case 4: own.y() = Real(-0.004) * h * k * k; break;
+    }
+    return p + bulk + own;
+  }
+  void set_substep(int k, int kind, bool third_patch, std::uint32_t seed, bool kicks) {
+    ParticleState& s = cloth.state;
+    std::mt19937 random(seed * 7919u + std::uint32_t(k));
+    std::uniform_real_distribution<Real> unit(-1, 1);
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const Vector3r start = at(i, Real(k), kind, third_patch);
+      Vector3r noise(unit(random), unit(random), unit(random));
+      noise *= Real(0.0003) * h * (kicks && random() % 97 == 0 ? 500 : 1);
+      const Vector3r end = at(i, Real(k + 1), kind, third_patch) + noise;
+      s.previous_x[i] = start.x(), s.previous_y[i] = start.y(), s.previous_z[i] = start.z();
+      s.x[i] = end.x(), s.y[i] = end.y(), s.z[i] = end.z();
+    }
+  }
+};
+
+TEST(SelfCollision, UpdatesAndRefinesMatchADetectionOnPathsThatCurveStopReverseAndJump) {
+  // Every substep of 40, update() and a refine() loop (while covers() holds, else a
+  // detection) list exactly what a detection of that substep lists, on trajectories that
+  // leave any straight path: horizons 2 and 5, rooms of 1 and 2 substeps, with and without
+  // edge–edge contacts. (Written from an independent review: a re-anchoring that forgot the
+  // substep, or a re-box that skipped triangles re-boxed before, passed every other test.)
+  std::size_t contacts = 0, by_kind[3] = {0, 0, 0};
+  std::uint32_t seed = 1;
+  for (const int motion : {0, 1, 10})
+    for (const std::size_t horizon : {std::size_t(2), std::size_t(5)})
+      for (const Real scale : {Real(1), Real(2)}) {
+        PrescribedPaths paths(20);
+        SelfCollisionSettings settings{Real(0.4) * paths.h, Real(0.1) * paths.h};
+        settings.skin = Real(0.01) * paths.h;
+        settings.motion_scale = scale;
+        settings.horizon = horizon;
+        settings.edge_edge = seed % 5 != 0;
+        const std::vector<std::uint32_t>& mesh = paths.cloth.grid.triangle_indices;
+        const std::size_t n = paths.cloth.state.size();
+        SelfCollision updated(mesh, n), refined(mesh, n), every(mesh, n);
+        Contacts by_update, by_refine, direct;
+        for (int k = 0; k < 40; ++k) {
+          paths.set_substep(k, motion % 10, motion >= 10, seed, seed % 3 == 0);
+          ++by_kind[int(updated.update(paths.cloth.state, settings, by_update))];
+          if (k > 0 && refined.covers(paths.cloth.state))
+            refined.refine(paths.cloth.state, settings, by_refine);
+          else
+            refined.detect(paths.cloth.state, settings, by_refine);
+          every.detect(paths.cloth.state, settings, direct);
+          contacts += direct.triangle_point_count() + direct.edge_edge_count();
+          const std::string where = "motion " + std::to_string(motion) + " horizon " +
+                                    std::to_string(horizon) + " scale " + std::to_string(scale) +
+                                    " substep " + std::to_string(k);
+          ASSERT_EQ(by_update.triangle_point, direct.triangle_point) << where;
+          ASSERT_EQ(by_update.edge_edge, direct.edge_edge) << where;
+          ASSERT_EQ(by_refine.triangle_point, direct.triangle_point) << where;
+          ASSERT_EQ(by_refine.edge_edge, direct.edge_edge) << where;
+        }
+        ++seed;
+      }
+  EXPECT_GT(contacts, 1000u);
+  EXPECT_GT(by_kind[int(SelfCollision::Update::refined)], 50u);
+  EXPECT_GT(by_kind[int(SelfCollision::Update::reboxed)], 50u);
+  EXPECT_GT(by_kind[int(SelfCollision::Update::built)], 50u);
 }
 
 TEST(SelfCollision, AParticleOffItsPathIsNotCoveredThoughItMovesLikeTheBulk) {

@@ -50,8 +50,10 @@
 // and while every particle keeps w ≤ b/2 and m ≤ b/2 and τ ≤ T (covers()), each pair that
 // meets the rule is a candidate: filtering the candidates (refine()) gives exactly the
 // contacts of a detection of its own. The broad phase grows each primitive's box, swept from
-// its references at τ_c to those at T, by its largest b + |V| (the pair's ρ is at most the
-// sum of the two), so the grids miss no candidate. A cloth moving on straight lines, whatever
+// its references at τ_c to those at T, by its largest b + |V|: a pair in contact at substep τ
+// has d(R(τ)) < r + ρ + b + b with ρ at most the sum of the two speeds, and both R(τ) lie in
+// the swept boxes, so the boxes of every contact overlap and the grids miss none. (A pair
+// that meets the candidate rule but only recedes may be missed: it is no contact.) A cloth moving on straight lines, whatever
 // its speeds, keeps its candidates the whole horizon; a cloth in the plane with itself has as
 // candidates the neighbours that approach, not every one within its budgets. (The frame
 // before was the bulk's motion alone: a fast fold left its room within two substeps, and each
@@ -80,9 +82,13 @@
 // Determinism: contacts are listed sorted by (vertex, triangle) and (edge, edge) for any
 // thread count.
 //
+// Rounding: the candidate rule has no allowance of its own; the budgets' skin is the room a
+// particle on its path keeps (with skin 0 and no change of motion, b = 0 and a rounding
+// off the path is a re-box).
+//
 // Cost (bench/collision_benchmarks.cpp, the drape at frame 60 and the folded 128² cloth):
 // the work is in the candidates' boxes, not in the contacts. Each of the 48,641 edges' boxes
-// (h long, grown by r/2 + budget) overlaps ~15 others, ~10 of them sharing no vertex (a
+// (h long, grown by r/2 + budget + speed, swept along the paths) overlaps ~15 others, ~10 of them sharing no vertex (a
 // segment distance each), and each of the 16,384 vertices meets ~17 triangle boxes; a
 // query scans ~95 entries of the grid for those. Hence reuse: the stage calls update(),
 // which filters the candidates while every particle keeps to its room, re-boxes only the
@@ -127,8 +133,9 @@ struct SelfCollisionSettings {
   Real skin = 0;
   /// The most substeps after a detection its candidates serve: update() builds again after
   /// that many. A build shortens it to the substeps in which its fast particles (the 90th
-  /// percentile of |V|) close kHorizonReachShare of the reach: each candidate pair's distance
-  /// allows for (horizon + 1) substeps of the relative motion of the pair's paths. ≥ 0.
+  /// percentile of |V|) close kHorizonReachShare of the reach, and to at most
+  /// SelfCollision::kLongestHorizon: each candidate pair's distance allows for (horizon + 1)
+  /// substeps of the relative motion of the pair's paths. Read at a build. ≥ 0.
   std::size_t horizon = 8;
 };
 
@@ -203,8 +210,9 @@ class SelfCollision {
   /// the candidates filtered (refine) when every particle is within its room; else the
   /// primitives of the particles that outran it re-anchored, re-boxed and queried again
   /// (the rest keep their candidates), or a full build when those passed kReboxedShare of
-  /// the mesh since the last build, or before any. The same contacts as detect() in every
-  /// case. Same errors as detect().
+  /// the mesh since the last build, past the last build's horizon, when edge_edge changed or
+  /// the reach grew, or before any. The same contacts as detect() in every case. Same errors
+  /// as detect().
   Update update(const SelfCollisionPositions& positions, const SelfCollisionSettings& settings,
                 Contacts& out);
   Update update(const ParticleState& state, const SelfCollisionSettings& settings, Contacts& out) {
@@ -278,11 +286,14 @@ class SelfCollision {
                       const SelfCollisionSettings& settings);
   /// The substeps left in the horizon, plus one: the relative motions a pair tested now
   /// allows for.
-  Real substeps_allowed() const { return Real(horizon_ - substep_ + 1); }
+  Real substeps_allowed() const { return Real(horizon_ - substep_) + 1; }
   /// The horizon of a build whose particles are on their paths: the substeps in which the
   /// fast ones close kHorizonReachShare of the reach, at most settings.horizon.
   std::size_t horizon_for(Real reach, const SelfCollisionSettings& settings);
   static constexpr Real kHorizonReachShare = Real(0.75);
+  /// The longest horizon a build takes, whatever the setting: a larger one would only sweep
+  /// the fast particles' boxes across the scene.
+  static constexpr std::size_t kLongestHorizon = 1024;
   /// Every particle's reference at this substep (A + τ V), and every record from them.
   void refresh_references(const SelfCollisionSettings& settings);
   /// The ball of particles `ids`' velocities: their mean and the largest distance from it.
@@ -353,6 +364,7 @@ class SelfCollision {
   std::vector<Vector3r> frame_origin_;  // start positions at the last build
   std::size_t substep_ = 0;             // τ: substeps since the last build
   std::size_t horizon_ = 0;             // T of the last build
+  Real built_reach_ = 0;                // the reach (thickness + margin) of the last build
   std::vector<Real> scratch_;           // the medians' copies
   // Incidence: each vertex's triangles and edges (CSR).
   std::vector<std::uint32_t> vertex_triangle_start_, vertex_triangles_;

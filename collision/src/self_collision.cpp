@@ -158,6 +158,12 @@ struct VelocityBall {
   Real centre[3], radius;
 };
 
+/// A record's velocity ball.
+template <class Record>
+VelocityBall ball_of(const Record& record) {
+  return {{record.centre[0], record.centre[1], record.centre[2]}, record.radius};
+}
+
 /// What `steps` substeps of relative motion of two primitives can close at most: steps ρ,
 /// with ρ = max |V_i − V_j| over their corners at most the distance of their balls' centres
 /// plus both radii.
@@ -480,9 +486,7 @@ void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Re
   const Real squared = detail::squared_segment_distance(reference_[p0], reference_[p1],
                                                         reference_[p2], reference_[p3]);
   const EdgeAnchors& own = edge_anchors_[e];
-  const Real allowed = allowed_between(VelocityBall{{own.centre[0], own.centre[1], own.centre[2]},
-                                                    own.radius},
-                                       edge_anchors_[f], substeps_allowed());
+  const Real allowed = allowed_between(ball_of(own), edge_anchors_[f], substeps_allowed());
   const Real within = reach + own.budget + edge_anchors_[f].budget + allowed;
   if (squared < within * within)
     out.push_back({std::min(e, f), std::max(e, f), std::sqrt(squared) - allowed});
@@ -555,9 +559,7 @@ void SelfCollision::add_edge_edge_candidates(std::uint32_t e, Real reach,
   // The distance test first (a vector at a time, no branch per edge met), then the topology
   // of the few within it: the same candidates as add_edge_edge_candidate, in the same order.
   const EdgeAnchors& record = edge_anchors_[e];
-  batch.gather(edge_anchors_.data(),
-               VelocityBall{{record.centre[0], record.centre[1], record.centre[2]}, record.radius},
-               substeps_allowed());
+  batch.gather(edge_anchors_.data(), ball_of(record), substeps_allowed());
   for (const std::uint32_t k : batch.measure(reference_[p0], reference_[p1], reach + record.budget)) {
     const std::uint32_t f = batch.edges[k];
     if (particles.may_touch(p0, p1, edges_[2 * f], edges_[2 * f + 1]))
@@ -623,9 +625,10 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   // Candidates: the pairs whose references can come closer than the reach plus their
   // particles' budgets and a substep of relative motion before the horizon's end (the top of
   // self_collision.hpp). Boxes: the paths to then, grown by the budgets, the speeds and the
-  // reach, the vertex's by all of the reach and an edge's by half. A pair within that
-  // distance at some substep has overlapping boxes, since no coordinate differs by more than
-  // the distance; so the grid misses no candidate.
+  // reach, the vertex's by all of the reach and an edge's by half. A pair in contact at
+  // some substep is within that distance there, and no coordinate differs by more than the
+  // distance, so its boxes overlap: the grid misses no contact (a candidate that only
+  // recedes may be missed; it is no contact).
   vertex_boxes_.resize(particle_count_);
   parallel_over(particle_count_,
                 [&](std::size_t i) { vertex_boxes_[i] = vertex_box(std::uint32_t(i), reach); });

@@ -13,6 +13,8 @@
 
 #include <hwy/highway.h>
 
+#include "segment_distances.hpp"
+
 HWY_BEFORE_NAMESPACE();
 namespace tessera {
 namespace HWY_NAMESPACE {
@@ -34,6 +36,50 @@ HWY_INLINE std::size_t AppendPassing(D d, M mask, std::size_t i, std::size_t cou
     found += k < count;
   }
   return found;
+}
+
+/// What `query.steps` substeps of relative motion can close between the query's ball and
+/// the lanes i .. i + lanes: steps ((radius + radius[k]) + √((dx² + dy²) + dz²)), the scalar
+/// allowed_between's operations in its order.
+template <class D>
+HWY_INLINE hwy::HWY_NAMESPACE::Vec<D> AllowanceAt(D d, const detail::BlockQuery& query,
+                                                  const detail::BallBatch& balls, std::size_t i) {
+  namespace hn = hwy::HWY_NAMESPACE;
+  const auto dx = hn::Sub(hn::Set(d, query.centre[0]), hn::LoadU(d, balls.cx + i));
+  const auto dy = hn::Sub(hn::Set(d, query.centre[1]), hn::LoadU(d, balls.cy + i));
+  const auto dz = hn::Sub(hn::Set(d, query.centre[2]), hn::LoadU(d, balls.cz + i));
+  const auto apart = hn::Sqrt(hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz)));
+  return hn::Mul(hn::Set(d, query.steps),
+                 hn::Add(hn::Add(hn::Set(d, query.radius), hn::LoadU(d, balls.radius + i)), apart));
+}
+
+/// The lanes i .. i + lanes that may pair with the query: their box overlaps the query's,
+/// they share no particle with it, and they are not all static with it.
+template <class D>
+HWY_INLINE hwy::HWY_NAMESPACE::Mask<D> MayPairAt(D d, const detail::BlockQuery& query,
+                                                 const detail::BlockBatch& lanes, std::size_t i) {
+  namespace hn = hwy::HWY_NAMESPACE;
+  const detail::BoxBatch& boxes = lanes.boxes;
+  auto m = hn::Le(hn::LoadU(d, boxes.lo[0] + i), hn::Set(d, query.box.hi[0]));
+  m = hn::And(m, hn::Le(hn::Set(d, query.box.lo[0]), hn::LoadU(d, boxes.hi[0] + i)));
+  for (int axis = 1; axis < 3; ++axis) {
+    m = hn::And(m, hn::Le(hn::LoadU(d, boxes.lo[axis] + i), hn::Set(d, query.box.hi[axis])));
+    m = hn::And(m, hn::Le(hn::Set(d, query.box.lo[axis]), hn::LoadU(d, boxes.hi[axis] + i)));
+  }
+  if (hn::AllFalse(d, m)) return m;
+  const hn::RebindToUnsigned<D> du;
+  const auto first = hn::BitCast(du, hn::Set(d, query.id[0])),
+             second = hn::BitCast(du, hn::Set(d, query.id[1]));
+  const auto id0 = hn::BitCast(du, hn::LoadU(d, lanes.topology.id[0] + i)),
+             id1 = hn::BitCast(du, hn::LoadU(d, lanes.topology.id[1] + i)),
+             id2 = hn::BitCast(du, hn::LoadU(d, lanes.topology.id[2] + i));
+  const auto shared =
+      hn::Or(hn::Or(hn::Or(hn::Eq(id0, first), hn::Eq(id1, first)), hn::Eq(id2, first)),
+             hn::Or(hn::Or(hn::Eq(id0, second), hn::Eq(id1, second)), hn::Eq(id2, second)));
+  m = hn::AndNot(hn::RebindMask(d, shared), m);
+  if (query.all_static)
+    m = hn::And(m, hn::Eq(hn::LoadU(d, lanes.topology.all_static + i), hn::Zero(d)));
+  return m;
 }
 
 }  // namespace HWY_NAMESPACE

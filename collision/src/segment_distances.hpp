@@ -2,8 +2,11 @@
 #pragma once
 
 #include <cstddef>
+#include <bit>
+#include <type_traits>
 #include <cstdint>
 
+#include <tessera/collision/spatial_hash.hpp>
 #include <tessera/core/real.hpp>
 
 #include "closest_distance.hpp"
@@ -44,5 +47,82 @@ std::size_t segments_within(const Vector3r& p1, const Vector3r& q1, Real own,
 /// increasing order; returns how many. Every array has the padded room.
 std::size_t segment_pairs_within(const SegmentBatch& first, const SegmentBatch& second,
                                  const Real* within, std::uint32_t* passing);
+
+/// Velocity balls (centre, radius) and base budgets by coordinate, readable as the batch
+/// they go with.
+struct BallBatch {
+  const Real *cx, *cy, *cz, *radius, *budget;
+};
+/// Boxes by coordinate (lower x, y, z, upper x, y, z), readable as the batch they go with.
+struct BoxBatch {
+  const Real* lo[3];
+  const Real* hi[3];
+};
+/// Particle indices as the bits of a Real lane (compared as integers, never computed with):
+/// up to three per lane (a triangle's corners; an edge's second repeated), and 1 where all of
+/// a lane's particles are static.
+struct TopologyBatch {
+  const Real* id[3];
+  const Real* all_static;
+};
+inline Real id_lane(std::uint32_t id) {
+  using Bits = std::conditional_t<sizeof(Real) == sizeof(std::uint32_t), std::uint32_t,
+                                  std::uint64_t>;
+  return std::bit_cast<Real>(Bits(id));
+}
+/// What a block's lanes carry beyond their coordinates.
+struct BlockBatch {
+  BallBatch balls;
+  BoxBatch boxes;
+  TopologyBatch topology;
+};
+/// The querying primitive: its velocity ball, the substeps its relative motion is allowed
+/// for, its box, its particles (a vertex's repeated) and whether all are static.
+struct BlockQuery {
+  Real centre[3];
+  Real radius;
+  Real steps;
+  Aabb box;
+  Real id[2];
+  bool all_static;
+};
+/// The lanes of a block (primitive_leaves.hpp: a leaf's members).
+inline constexpr std::size_t kBlockLanes = 8;
+/// A leaf's fields, each a block of kBlockLanes lanes (primitive_leaves.hpp): its members'
+/// coordinates (segments p, q; triangles a, b, c; x, y, z each), then these.
+enum LeafField : std::size_t {
+  kLeafBudget,
+  kLeafCentre,                     // x, y, z of the velocity ball's centre
+  kLeafRadius = kLeafCentre + 3,   // the ball's radius
+  kLeafLo,                         // the member's box
+  kLeafHi = kLeafLo + 3,
+  kLeafIds = kLeafHi + 3,          // its particles, id_lane (an edge's second repeated)
+  kLeafStatic = kLeafIds + 3,      // 1 where all are static
+  kLeafTailFields
+};
+/// The lanes of leaf data `base` whose coordinates take `coordinates` fields.
+inline BlockBatch block_lanes(const Real* base, std::size_t coordinates) {
+  const auto at = [&](std::size_t field) { return base + (coordinates + field) * kBlockLanes; };
+  return {{at(kLeafCentre), at(kLeafCentre + 1), at(kLeafCentre + 2), at(kLeafRadius),
+           at(kLeafBudget)},
+          {{at(kLeafLo), at(kLeafLo + 1), at(kLeafLo + 2)},
+           {at(kLeafHi), at(kLeafHi + 1), at(kLeafHi + 2)}},
+          {{at(kLeafIds), at(kLeafIds + 1), at(kLeafIds + 2)}, at(kLeafStatic)}};
+}
+/// The pairs of a primitive and the members of some leaves that can be a contact's
+/// candidates. The leaves' fields are at leaf_data + (leaf · (6 + kLeafTailFields) + field) ·
+/// kBlockLanes, for each leaf of leaves[0 .. leaf_count). A member is tested when its box
+/// overlaps the query's (a vector with none is skipped), it shares no particle with it and is
+/// not all static with it; it passes when its squared distance is below
+/// (own + (budget[k] + allowed[k]))², allowed[k] = steps ((radius + radius[k]) +
+/// √((dx² + dy²) + dz²)), d = centre − centre[k] (what the two primitives' relative motion
+/// may close over `steps` substeps, allowed_between's operations in its order). The passing
+/// positions b · kBlockLanes + lane go to `within` in order; `squared` and `allowed` are
+/// written at the positions of the vectors measured. The distances are segments_within's
+/// bits.
+std::size_t segments_within_leaves(const Vector3r& p1, const Vector3r& q1, Real own,
+                                   const BlockQuery& query, const Real* leaf_data,
+                                   const std::uint32_t* leaves, std::size_t leaf_count,
+                                   Real* squared, Real* allowed, std::uint32_t* within);
 
 }  // namespace tessera::detail

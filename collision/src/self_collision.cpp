@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <span>
 #include <string>
 
@@ -27,6 +28,7 @@
 
 #include "chunked_output.hpp"
 #include "closest_distance.hpp"
+#include "primitive_leaves.hpp"
 #include "segment_distances.hpp"
 #include "triangle_distances.hpp"
 
@@ -47,6 +49,24 @@ struct SelfCollision::Chunks {
     Real coordinate;
   };
   std::vector<Largest> largest;
+};
+
+namespace {
+/// A triangle leaf's lanes: corners a, b, c (x, y, z each), budget, velocity ball (centre,
+/// radius), box (lo, hi), corners' particles, all static; an edge leaf's: p, q (x, y, z
+/// each), budget, ball, box, particles (p, q, q), all static.
+constexpr std::size_t kTriangleLeafFields = 9 + detail::kLeafTailFields,
+                      kEdgeLeafFields = 6 + detail::kLeafTailFields;
+constexpr Aabb kEmptyBox{{std::numeric_limits<Real>::max(), std::numeric_limits<Real>::max(),
+                          std::numeric_limits<Real>::max()},
+                         {std::numeric_limits<Real>::lowest(), std::numeric_limits<Real>::lowest(),
+                          std::numeric_limits<Real>::lowest()}};
+}  // namespace
+
+struct SelfCollision::Leaves {
+  detail::PrimitiveLeaves vertices, triangles, edges;
+  detail::LeafFields<kTriangleLeafFields> triangle_fields;
+  detail::LeafFields<kEdgeLeafFields> edge_fields;
 };
 
 namespace {
@@ -250,6 +270,11 @@ struct TriangleBatch {
   }
 };
 
+detail::LeafQuery& leaf_query() {
+  thread_local detail::LeafQuery query;
+  return query;
+}
+
 TriangleBatch& triangle_batch() {
   thread_local TriangleBatch batch;
   return batch;
@@ -334,7 +359,8 @@ SelfCollision::SelfCollision(std::span<const std::uint32_t> triangles,
                              std::size_t particle_count)
     : particle_count_(particle_count),
       triangles_(triangles.begin(), triangles.end()),
-      chunks_(std::make_unique<Chunks>()) {
+      chunks_(std::make_unique<Chunks>()),
+      leaves_(std::make_unique<Leaves>()) {
   if (triangles.size() % 3 != 0)
     throw InvalidInput("self collision: " + std::to_string(triangles.size()) +
                        " triangle indices are not a multiple of 3");
@@ -645,37 +671,175 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   edge_boxes_.resize(edge_queries);
   parallel_over(edge_queries,
                 [&](std::size_t e) { edge_boxes_[e] = edge_box(std::uint32_t(e), reach); });
-  triangle_grid_.build(triangle_boxes_);
-  edge_grid_.build(edge_boxes_);
+  member_grids_current_ = false;  // built at the first re-box (rebox())
 
-  // Vertex–triangle: p against the triangles its box meets.
+  // The leaves (primitive_leaves.hpp): ordered once, by the references of the first build;
+  // boxed by their members' boxes; the triangles' and edges' records as lanes.
+  Leaves& leaves = *leaves_;
+  if (!leaves_ordered_) {
+    std::vector<Vector3r> points(reference_.begin(), reference_.end());
+    leaves.vertices.order(points);
+    points.resize(triangle_count);
+    for (std::size_t t = 0; t < triangle_count; ++t)
+      points[t] = (reference_[triangles_[3 * t]] + reference_[triangles_[3 * t + 1]] +
+                   reference_[triangles_[3 * t + 2]]) / Real(3);
+    leaves.triangles.order(points);
+    points.resize(edge_count);
+    for (std::size_t e = 0; e < edge_count; ++e)
+      points[e] = (reference_[edges_[2 * e]] + reference_[edges_[2 * e + 1]]) / Real(2);
+    leaves.edges.order(points);
+    leaves.triangle_fields.resize(leaves.triangles.leaf_count());
+    leaves.edge_fields.resize(leaves.edges.leaf_count());
+    leaves_ordered_ = true;
+  }
+  constexpr std::size_t kLanes = detail::PrimitiveLeaves::kLeafSize;
+  const auto parallel = [](std::size_t n, auto&& body) { parallel_over(n, body); };
+  leaves.vertices.box(vertex_boxes_, parallel);
+  leaves.triangles.box(triangle_boxes_, parallel);
+  parallel_over(leaves.triangles.leaf_count(), [&](std::size_t leaf) {
+    const std::uint32_t* members = leaves.triangles.members(leaf);
+    for (std::size_t k = 0; k < kLanes; ++k) {
+      const TriangleAnchors& record =
+          triangle_anchors_[members[members[k] == detail::PrimitiveLeaves::kNone ? 0 : k]];
+      for (std::size_t j = 0; j < 9; ++j)
+        leaves.triangle_fields.block(leaf, j)[k] = record.corner[j / 3][j % 3];
+      leaves.triangle_fields.block(leaf, 9)[k] = record.budget;
+      for (std::size_t j = 0; j < 3; ++j) leaves.triangle_fields.block(leaf, 10 + j)[k] = record.centre[j];
+      leaves.triangle_fields.block(leaf, 13)[k] = record.radius;
+      // A padding lane's box is empty: it pairs with nothing.
+      const Aabb box = members[k] == detail::PrimitiveLeaves::kNone ? kEmptyBox : triangle_boxes_[members[k]];
+      for (std::size_t j = 0; j < 3; ++j)
+        leaves.triangle_fields.block(leaf, 14 + j)[k] = box.lo[j],
+        leaves.triangle_fields.block(leaf, 17 + j)[k] = box.hi[j];
+      const std::uint32_t t = members[members[k] == detail::PrimitiveLeaves::kNone ? 0 : k];
+      bool all_static = true;
+      for (std::size_t j = 0; j < 3; ++j) {
+        const std::uint32_t corner = triangles_[3 * std::size_t(t) + j];
+        leaves.triangle_fields.block(leaf, 20 + j)[k] = detail::id_lane(corner);
+        all_static = all_static && positions.inverse_mass[corner] == 0;
+      }
+      leaves.triangle_fields.block(leaf, 23)[k] = all_static ? Real(1) : Real(0);
+    }
+  });
+  if (edge_queries > 0) {
+    leaves.edges.box(edge_boxes_, parallel);
+    parallel_over(leaves.edges.leaf_count(), [&](std::size_t leaf) {
+      const std::uint32_t* members = leaves.edges.members(leaf);
+      for (std::size_t k = 0; k < kLanes; ++k) {
+        const EdgeAnchors& record =
+            edge_anchors_[members[members[k] == detail::PrimitiveLeaves::kNone ? 0 : k]];
+        for (std::size_t j = 0; j < 3; ++j)
+          leaves.edge_fields.block(leaf, j)[k] = record.p[j],
+          leaves.edge_fields.block(leaf, 3 + j)[k] = record.q[j],
+          leaves.edge_fields.block(leaf, 7 + j)[k] = record.centre[j];
+        leaves.edge_fields.block(leaf, 6)[k] = record.budget;
+        leaves.edge_fields.block(leaf, 10)[k] = record.radius;
+        const Aabb box = members[k] == detail::PrimitiveLeaves::kNone ? kEmptyBox : edge_boxes_[members[k]];
+        for (std::size_t j = 0; j < 3; ++j)
+          leaves.edge_fields.block(leaf, 11 + j)[k] = box.lo[j],
+          leaves.edge_fields.block(leaf, 14 + j)[k] = box.hi[j];
+        const std::uint32_t e = members[members[k] == detail::PrimitiveLeaves::kNone ? 0 : k];
+        const std::uint32_t p = edges_[2 * std::size_t(e)], q = edges_[2 * std::size_t(e) + 1];
+        leaves.edge_fields.block(leaf, 17)[k] = detail::id_lane(p);
+        leaves.edge_fields.block(leaf, 18)[k] = leaves.edge_fields.block(leaf, 19)[k] =
+            detail::id_lane(q);
+        leaves.edge_fields.block(leaf, 20)[k] =
+            positions.inverse_mass[p] == 0 && positions.inverse_mass[q] == 0 ? Real(1) : Real(0);
+      }
+    });
+  }
+  const Real steps = substeps_allowed();
+
+  // Vertex–triangle: each vertex of a leaf against every triangle of the triangle leaves
+  // its leaf's box meets, the distances a vector at a time (triangle_distances.cpp, the
+  // scalar rule's bits), then the topology of those within (not a corner, not all static).
   chunks_->triangle_point_candidates.run(
-      particle_count_,
-      [&](std::size_t vertex, std::vector<Candidate>& buffer) {
-        const std::uint32_t p = std::uint32_t(vertex);
-        const std::size_t first = buffer.size();
-        add_triangle_point_candidates(p, reach, positions, buffer, [&](auto&& visit) {
-          triangle_grid_.for_each_overlap(vertex_boxes_[p], visit);
-        });
-        std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
-                  [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
+      leaves.vertices.leaf_count(),
+      [&](std::size_t leaf, std::vector<Candidate>& buffer) {
+        detail::LeafQuery& query = leaf_query();
+        query.clear();
+        leaves.triangles.grid().for_each_overlap(
+            leaves.vertices.leaf_box(leaf), [&](std::uint32_t met) { query.leaves.push_back(met); });
+        if (query.leaves.empty()) return;
+        query.fit();
+        const std::uint32_t* members = leaves.vertices.members(leaf);
+        for (std::size_t j = 0; j < kLanes && members[j] != detail::PrimitiveLeaves::kNone; ++j) {
+          const std::uint32_t p = members[j];
+          const Real id = detail::id_lane(p);
+          const detail::BlockQuery own{{velocity_[p].x(), velocity_[p].y(), velocity_[p].z()},
+                                       0, steps, vertex_boxes_[p], {id, id},
+                                       positions.inverse_mass[p] == 0};
+          const std::size_t found = detail::triangles_within_leaves(
+              reference_[p], reach + budget_[p], own, leaves.triangle_fields.data(),
+              query.leaves.data(), query.leaves.size(), query.squared.data(),
+              query.allowed.data(), query.within.data());
+          for (std::size_t w = 0; w < found; ++w) {
+            const std::uint32_t k = query.within[w];
+            const std::uint32_t t = leaves.triangles.members(query.leaves[k / kLanes])[k % kLanes];
+            buffer.push_back({p, t, std::sqrt(query.squared[k]) - query.allowed[k]});
+          }
+        }
       },
       candidate_triangle_point_);
+  sort_candidates(candidate_triangle_point_, particle_count_);
 
-  // Edge–edge: each edge against the higher edges its box meets, their distances a vector
-  // at a time (segment_distances.cpp: the same bits as add_edge_edge_candidate's).
+  // Edge–edge: each edge of a leaf against every edge of the leaves at or after its own that
+  // its leaf's box meets (in its own leaf, the edges after it), the distances a vector at a
+  // time (segment_distances.cpp, add_edge_edge_candidate's bits), then the topology.
   chunks_->edge_edge_candidates.run(
-      edge_queries,
-      [&](std::size_t edge, std::vector<Candidate>& buffer) {
-        const std::uint32_t e = std::uint32_t(edge);
-        const std::size_t first = buffer.size();
-        add_edge_edge_candidates(e, reach, positions, buffer, [&](auto&& visit) {
-          edge_grid_.for_each_overlap_above(edge_boxes_[e], e, visit);
+      edge_queries > 0 ? leaves.edges.leaf_count() : 0,
+      [&](std::size_t leaf, std::vector<Candidate>& buffer) {
+        detail::LeafQuery& query = leaf_query();
+        query.clear();
+        // The own leaf first: its pairs are kept from their first edge.
+        query.leaves.push_back(std::uint32_t(leaf));
+        leaves.edges.grid().for_each_overlap(leaves.edges.leaf_box(leaf), [&](std::uint32_t met) {
+          if (met > leaf) query.leaves.push_back(met);
         });
-        std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
-                  [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
+        query.fit();
+        const std::uint32_t* members = leaves.edges.members(leaf);
+        const auto own_field = [&](std::size_t field, std::size_t j) {
+          return leaves.edge_fields.block(leaf, field)[j];
+        };
+        for (std::size_t j = 0; j < kLanes && members[j] != detail::PrimitiveLeaves::kNone; ++j) {
+          const std::uint32_t e = members[j];
+          // The edge's own record, from its leaf's lanes (in cache, unlike edge_anchors_[e]).
+          const Vector3r p(own_field(0, j), own_field(1, j), own_field(2, j)),
+              q(own_field(3, j), own_field(4, j), own_field(5, j));
+          const std::size_t tail = 6;
+          const detail::BlockQuery own{
+              {own_field(tail + detail::kLeafCentre, j), own_field(tail + detail::kLeafCentre + 1, j),
+               own_field(tail + detail::kLeafCentre + 2, j)},
+              own_field(tail + detail::kLeafRadius, j),
+              steps,
+              edge_boxes_[e],
+              {own_field(tail + detail::kLeafIds, j), own_field(tail + detail::kLeafIds + 1, j)},
+              own_field(tail + detail::kLeafStatic, j) != 0};
+          const Vector3r way = q - p;
+          if (detail::dot3(way, way) <= kDegenerateTolerance * kDegenerateTolerance) {
+            // A point-like edge: the scalar rule, which handles it.
+            for (std::size_t k = j + 1; k < query.leaves.size() * kLanes; ++k) {
+              const std::uint32_t f = leaves.edges.members(query.leaves[k / kLanes])[k % kLanes];
+              if (f != detail::PrimitiveLeaves::kNone)
+                add_edge_edge_candidate(e, f, reach, positions, buffer);
+            }
+            continue;
+          }
+          const std::size_t found = detail::segments_within_leaves(
+              p, q, reach + own_field(tail + detail::kLeafBudget, j), own,
+              leaves.edge_fields.data(), query.leaves.data(), query.leaves.size(),
+              query.squared.data(), query.allowed.data(), query.within.data());
+          for (std::size_t w = 0; w < found; ++w) {
+            const std::uint32_t k = query.within[w];
+            if (k <= j) continue;  // the own leaf's earlier edges, and itself
+            const std::uint32_t f = leaves.edges.members(query.leaves[k / kLanes])[k % kLanes];
+            buffer.push_back({std::min(e, f), std::max(e, f),
+                              std::sqrt(query.squared[k]) - query.allowed[k]});
+          }
+        }
       },
       candidate_edge_edge_);
+  sort_candidates(candidate_edge_edge_, edge_count);
   return bulk;
 }
 
@@ -784,6 +948,12 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   if (double(reboxed) > kReboxedShare * double(triangle_count + edges_.size() / 2)) return false;
   std::sort(new_triangles_.begin(), new_triangles_.end());
   std::sort(new_edges_.begin(), new_edges_.end());
+  // The build's boxes in grids of their own, once per build: re-boxed primitives query them.
+  if (!member_grids_current_) {
+    triangle_grid_.build(triangle_boxes_);
+    edge_grid_.build(edge_boxes_);
+    member_grids_current_ = true;
+  }
 
   // Re-anchor the particles that outran their room on the path of their motion now, in the
   // frame; their departures under `now` measured again (about 0: on the path, up to
@@ -897,6 +1067,25 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
     merge_sorted(candidate_edge_edge_, found_edge_edge_);
   }
   return true;
+}
+
+void SelfCollision::sort_candidates(std::vector<Candidate>& candidates, std::size_t keys) {
+  // By first: a counting sort (stable); then each first's few by second.
+  key_start_.assign(keys + 1, 0);
+  for (const Candidate& pair : candidates) ++key_start_[pair.first + 1];
+  for (std::size_t k = 0; k < keys; ++k) key_start_[k + 1] += key_start_[k];
+  merged_.resize(candidates.size());
+  for (const Candidate& pair : candidates) merged_[key_start_[pair.first]++] = pair;
+  candidates.swap(merged_);
+  // key_start_[k] is now the end of key k's run.
+  std::size_t begin = 0;
+  for (std::size_t k = 0; k < keys; ++k) {
+    const std::size_t end = key_start_[k];
+    if (end - begin > 1)
+      std::sort(candidates.begin() + std::ptrdiff_t(begin), candidates.begin() + std::ptrdiff_t(end),
+                [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
+    begin = end;
+  }
 }
 
 void SelfCollision::merge_sorted(std::vector<Candidate>& into,

@@ -33,20 +33,16 @@ namespace tessera {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-std::size_t TrianglesWithin(const Vector3r& p, Real own, const detail::TriangleBatch& batch,
-                            Real* squared, std::uint32_t* within) {
-  const hn::CappedTag<Real, detail::kSegmentBatchLanes> d;
-  using V = hn::Vec<decltype(d)>;
-  const std::size_t lanes = hn::Lanes(d);
+/// The squared distances from p to the batch's triangles i .. i + lanes.
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE V SquaredTriangleDistancesAt(D d, const detail::TriangleBatch& batch, std::size_t i,
+                                        V px, V py, V pz) {
   const V zero = hn::Zero(d);
-  const V px = hn::Set(d, p.x()), py = hn::Set(d, p.y()), pz = hn::Set(d, p.z());
-  const V reach_own = hn::Set(d, own);
   // x + (y + z), as dot3.
   const auto dot = [](V ax, V ay, V az, V bx, V by, V bz) {
     return hn::Add(hn::Mul(ax, bx), hn::Add(hn::Mul(ay, by), hn::Mul(az, bz)));
   };
-  std::size_t found = 0;
-  for (std::size_t i = 0; i < batch.count; i += lanes) {
+  {
     const V ax = hn::LoadU(d, batch.ax + i), ay = hn::LoadU(d, batch.ay + i),
             az = hn::LoadU(d, batch.az + i);
     const V bx = hn::LoadU(d, batch.bx + i), by = hn::LoadU(d, batch.by + i),
@@ -97,11 +93,56 @@ std::size_t TrianglesWithin(const Vector3r& p, Real own, const detail::TriangleB
     qx = hn::IfThenElse(at_a, ax, qx), qy = hn::IfThenElse(at_a, ay, qy),
     qz = hn::IfThenElse(at_a, az, qz);
     const V gx = hn::Sub(px, qx), gy = hn::Sub(py, qy), gz = hn::Sub(pz, qz);
-    const V distance = dot(gx, gy, gz, gx, gy, gz);
+    return dot(gx, gy, gz, gx, gy, gz);
+  }
+}
+
+std::size_t TrianglesWithin(const Vector3r& p, Real own, const detail::TriangleBatch& batch,
+                            Real* squared, std::uint32_t* within) {
+  const hn::CappedTag<Real, detail::kSegmentBatchLanes> d;
+  const std::size_t lanes = hn::Lanes(d);
+  const auto px = hn::Set(d, p.x()), py = hn::Set(d, p.y()), pz = hn::Set(d, p.z());
+  const auto reach_own = hn::Set(d, own);
+  std::size_t found = 0;
+  for (std::size_t i = 0; i < batch.count; i += lanes) {
+    const auto distance = SquaredTriangleDistancesAt(d, batch, i, px, py, pz);
     hn::StoreU(distance, d, squared + i);
-    const V reach = hn::Add(reach_own, hn::LoadU(d, batch.budget + i));
+    const auto reach = hn::Add(reach_own, hn::LoadU(d, batch.budget + i));
     found = AppendPassing(d, hn::Lt(distance, hn::Mul(reach, reach)), i, batch.count, within,
                           found);
+  }
+  return found;
+}
+
+std::size_t TrianglesWithinLeaves(const Vector3r& p, Real own, const detail::BlockQuery& query,
+                                  const Real* leaf_data, const std::uint32_t* leaves,
+                                  std::size_t leaf_count, Real* squared, Real* allowed,
+                                  std::uint32_t* within) {
+  const hn::CappedTag<Real, detail::kBlockLanes> d;
+  const std::size_t width = hn::Lanes(d);
+  const auto px = hn::Set(d, p.x()), py = hn::Set(d, p.y()), pz = hn::Set(d, p.z());
+  const auto reach_own = hn::Set(d, own);
+  constexpr std::size_t kFields = 9 + detail::kLeafTailFields;
+  std::size_t found = 0;
+  for (std::size_t b = 0; b < leaf_count; ++b) {
+    const Real* base = leaf_data + std::size_t(leaves[b]) * kFields * detail::kBlockLanes;
+    const auto at = [&](std::size_t field) { return base + field * detail::kBlockLanes; };
+    const detail::TriangleBatch triangles{at(0), at(1), at(2), at(3), at(4), at(5),
+                                          at(6), at(7), at(8), nullptr, detail::kBlockLanes};
+    const detail::BlockBatch lanes = detail::block_lanes(base, 9);
+    for (std::size_t i = 0; i < detail::kBlockLanes; i += width) {
+      const auto may_pair = MayPairAt(d, query, lanes, i);
+      if (hn::AllFalse(d, may_pair)) continue;
+      const std::size_t out = b * detail::kBlockLanes + i;
+      const auto closing = AllowanceAt(d, query, lanes.balls, i);
+      hn::StoreU(closing, d, allowed + out);
+      const auto distance = SquaredTriangleDistancesAt(d, triangles, i, px, py, pz);
+      hn::StoreU(distance, d, squared + out);
+      const auto reach =
+          hn::Add(reach_own, hn::Add(hn::LoadU(d, lanes.balls.budget + i), closing));
+      found = AppendPassing(d, hn::And(may_pair, hn::Lt(distance, hn::Mul(reach, reach))), out,
+                            out + width, within, found);
+    }
   }
   return found;
 }
@@ -114,10 +155,19 @@ HWY_AFTER_NAMESPACE();
 namespace tessera::detail {
 
 HWY_EXPORT(TrianglesWithin);
+HWY_EXPORT(TrianglesWithinLeaves);
 
 std::size_t triangles_within(const Vector3r& p, Real own, const TriangleBatch& batch,
                              Real* squared, std::uint32_t* within) {
   return HWY_DYNAMIC_DISPATCH(TrianglesWithin)(p, own, batch, squared, within);
+}
+
+std::size_t triangles_within_leaves(const Vector3r& p, Real own, const BlockQuery& query,
+                                    const Real* leaf_data, const std::uint32_t* leaves,
+                                    std::size_t leaf_count, Real* squared, Real* allowed,
+                                    std::uint32_t* within) {
+  return HWY_DYNAMIC_DISPATCH(TrianglesWithinLeaves)(p, own, query, leaf_data, leaves,
+                                                     leaf_count, squared, allowed, within);
 }
 
 }  // namespace tessera::detail

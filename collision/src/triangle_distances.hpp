@@ -29,4 +29,11 @@ struct TriangleBatch {
 std::size_t triangles_within(const Vector3r& p, Real own, const TriangleBatch& batch,
                              Real* squared, std::uint32_t* within);
 
+/// segments_within_leaves (segment_distances.hpp) for a point against triangles: their leaves
+/// hold 9 + kLeafTailFields fields; triangles_within's bits.
+std::size_t triangles_within_leaves(const Vector3r& p, Real own, const BlockQuery& query,
+                                    const Real* leaf_data, const std::uint32_t* leaves,
+                                    std::size_t leaf_count, Real* squared, Real* allowed,
+                                    std::uint32_t* within);
+
 }  // namespace tessera::detail

@@ -408,6 +408,17 @@ class SelfCollision {
   std::vector<Candidate> candidate_triangle_point_, candidate_edge_edge_;
   struct Chunks;  // the parallel loops' per-chunk buffers (chunked_output.hpp)
   std::unique_ptr<Chunks> chunks_;
+  /// The build's broad phase: vertices, triangles and edges in leaves, ordered at the first
+  /// build, and the triangles' and edges' records as blocks of lanes (primitive_leaves.hpp).
+  struct Leaves;
+  std::unique_ptr<Leaves> leaves_;
+  bool leaves_ordered_ = false;
+  /// Whether triangle_grid_ and edge_grid_ hold this build's boxes: re-boxes query them,
+  /// builds do not, so they are built at a build's first re-box.
+  bool member_grids_current_ = false;
+  /// The candidates sorted by (first, second), first below `keys` (a counting sort by first).
+  void sort_candidates(std::vector<Candidate>& candidates, std::size_t keys);
+  std::vector<std::uint32_t> key_start_;
 };
 
 /// The contacts as constraint batches: rest distance = thickness, compression stiffness =

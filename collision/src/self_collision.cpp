@@ -4,14 +4,18 @@
 //   reach_boxes        each particle's motion and budget (what it may move until the next
 //                      detection); the boxes of vertices, triangles and edges at the start,
 //                      grown by their budgets and by r (vertices), r/2 (edges)
-//   grids              the triangles and the edges in a uniform grid each
-//   vertex–triangle    each vertex queries the triangle grid; topology, statics, distance
-//   edge–edge          each edge queries the edge grid for higher edges; same filters
+//   leaves             vertices, triangles and edges in leaves of 8 (primitive_leaves.hpp),
+//                      the triangle and edge leaves' boxes in a uniform grid each
+//   vertex–triangle    each vertex leaf queries the triangle leaves' grid once; each vertex
+//                      against the met leaves' members, a vector at a time: box, topology,
+//                      statics and distance as lane masks
+//   edge–edge          each edge leaf the same against its own and higher edge leaves
 //   filter             the candidates that meet the contact rule at this substep (also
 //                      what refine() does on later substeps)
 //
-// Both contact lists come out of chunked loops (chunked_output.hpp): sorted by key, whatever
-// the thread count.
+// Both candidate lists come out of chunked loops (chunked_output.hpp) and a counting sort:
+// sorted by key, whatever the thread count. Re-boxes query the primitives' own boxes in
+// grids of their own (built at a build's first re-box).
 #include <tessera/collision/self_collision.hpp>
 
 #include <algorithm>

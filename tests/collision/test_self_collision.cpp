@@ -453,6 +453,110 @@ TEST(SelfCollision, BatchedTriangleDistancesAreTheScalarOnesBitForBitOnEveryTarg
   EXPECT_LT(found_total, 4 * compared / 5);
 }
 
+TEST(SelfCollision, LeafKernelsPassExactlyTheScalarRulesPairsOnEveryTarget) {
+  // The build measures each primitive against the members of the leaves its leaf meets, read
+  // in place (triangles_within_leaves, segments_within_leaves): a member passes when its box
+  // overlaps the query's, it shares no particle with it, it is not all static with it, and
+  // its distance is below own + (budget + allowed), allowed the balls' closing over `steps`.
+  // Each lane must give the scalar rule's bits and answer, on every target.
+  std::mt19937 random(5);
+  std::uniform_real_distribution<Real> coordinate(-1, 1), unit(0, 1);
+  const auto point = [&] { return Vector3r(coordinate(random), coordinate(random), coordinate(random)); };
+  constexpr std::size_t kLeaves = 6, kLanes = detail::kBlockLanes;
+  for (const std::size_t coordinates : {std::size_t(6), std::size_t(9)}) {
+    const std::size_t fields = coordinates + detail::kLeafTailFields;
+    std::vector<Real> data(kLeaves * fields * kLanes);
+    const auto at = [&](std::size_t leaf, std::size_t field, std::size_t lane) -> Real& {
+      return data[(leaf * fields + field) * kLanes + lane];
+    };
+    std::size_t compared = 0, passed = 0, ruled_out = 0;
+    for (int round = 0; round < 30; ++round) {
+      for (std::size_t leaf = 0; leaf < kLeaves; ++leaf)
+        for (std::size_t lane = 0; lane < kLanes; ++lane) {
+          Vector3r corner[3] = {point(), point(), point()};
+          for (std::size_t c = 0; c < coordinates / 3; ++c)
+            for (int axis = 0; axis < 3; ++axis) at(leaf, 3 * c + std::size_t(axis), lane) = corner[c][axis];
+          const std::size_t tail = coordinates;
+          at(leaf, tail + detail::kLeafBudget, lane) = Real(0.2) * unit(random);
+          for (int axis = 0; axis < 3; ++axis)
+            at(leaf, tail + detail::kLeafCentre + std::size_t(axis), lane) = Real(0.1) * coordinate(random);
+          at(leaf, tail + detail::kLeafRadius, lane) = Real(0.05) * unit(random);
+          for (int axis = 0; axis < 3; ++axis) {
+            const Real lo = coordinate(random);
+            at(leaf, tail + detail::kLeafLo + std::size_t(axis), lane) = lo;
+            at(leaf, tail + detail::kLeafHi + std::size_t(axis), lane) = lo + unit(random);
+          }
+          for (std::size_t k = 0; k < 3; ++k)
+            at(leaf, tail + detail::kLeafIds + k, lane) = detail::id_lane(std::uint32_t(random() % 40));
+          at(leaf, tail + detail::kLeafStatic, lane) = random() % 4 == 0 ? Real(1) : Real(0);
+        }
+      const std::vector<std::uint32_t> met = {4, 1, 5, 2};
+      const Vector3r p1 = point(), q1 = p1 + Real(0.5) * point();
+      detail::BlockQuery query{{Real(0.1) * coordinate(random), Real(0.1) * coordinate(random),
+                                Real(0.1) * coordinate(random)},
+                               Real(0.05) * unit(random), Real(3), {}, {}, round % 3 == 0};
+      for (int axis = 0; axis < 3; ++axis)
+        query.box.lo[axis] = coordinate(random) - Real(0.5), query.box.hi[axis] = query.box.lo[axis] + Real(1.5);
+      query.id[0] = detail::id_lane(std::uint32_t(random() % 40));
+      query.id[1] = coordinates == 6 ? detail::id_lane(std::uint32_t(random() % 40)) : query.id[0];
+      const Real own = Real(0.3) * unit(random);
+      for (const std::string& target : available_simd_targets()) {
+        force_simd_target(target);
+        const std::size_t room = met.size() * kLanes + detail::kSegmentBatchLanes;
+        std::vector<Real> squared(room), allowed(room);
+        std::vector<std::uint32_t> within(room), expected;
+        const std::size_t found =
+            coordinates == 6
+                ? detail::segments_within_leaves(p1, q1, own, query, data.data(), met.data(),
+                                                 met.size(), squared.data(), allowed.data(), within.data())
+                : detail::triangles_within_leaves(p1, own, query, data.data(), met.data(), met.size(),
+                                                  squared.data(), allowed.data(), within.data());
+        for (std::size_t b = 0; b < met.size(); ++b)
+          for (std::size_t lane = 0; lane < kLanes; ++lane) {
+            const std::size_t leaf = met[b], tail = coordinates, k = b * kLanes + lane;
+            const auto v = [&](std::size_t field) {
+              return Vector3r(at(leaf, field, lane), at(leaf, field + 1, lane), at(leaf, field + 2, lane));
+            };
+            bool may = true;
+            for (int axis = 0; axis < 3; ++axis)
+              may = may && at(leaf, tail + detail::kLeafLo + std::size_t(axis), lane) <= query.box.hi[axis] &&
+                    query.box.lo[axis] <= at(leaf, tail + detail::kLeafHi + std::size_t(axis), lane);
+            for (std::size_t id = 0; id < 3; ++id)
+              for (const Real mine : query.id)
+                may = may && std::memcmp(&at(leaf, tail + detail::kLeafIds + id, lane), &mine, sizeof(Real)) != 0;
+            may = may && !(query.all_static && at(leaf, tail + detail::kLeafStatic, lane) != 0);
+            if (!may) {
+              ++ruled_out;
+              continue;
+            }
+            const Real dx = query.centre[0] - at(leaf, tail + detail::kLeafCentre, lane),
+                       dy = query.centre[1] - at(leaf, tail + detail::kLeafCentre + 1, lane),
+                       dz = query.centre[2] - at(leaf, tail + detail::kLeafCentre + 2, lane);
+            const Real closing = query.steps * (query.radius + at(leaf, tail + detail::kLeafRadius, lane) +
+                                                std::sqrt(dx * dx + dy * dy + dz * dz));
+            const Real distance =
+                coordinates == 6 ? detail::squared_segment_distance(p1, q1, v(0), v(3))
+                                 : detail::squared_point_triangle_distance(p1, v(0), v(3), v(6));
+            EXPECT_EQ(std::memcmp(&allowed[k], &closing, sizeof(Real)), 0) << target;
+            EXPECT_EQ(std::memcmp(&squared[k], &distance, sizeof(Real)), 0) << target;
+            const Real limit = own + (at(leaf, tail + detail::kLeafBudget, lane) + closing);
+            if (distance < limit * limit) expected.push_back(std::uint32_t(k));
+            ++compared;
+          }
+        EXPECT_EQ(std::vector<std::uint32_t>(within.begin(), within.begin() + std::ptrdiff_t(found)),
+                  expected)
+            << target << (coordinates == 6 ? " segments" : " triangles");
+        passed += found;
+      }
+    }
+    force_simd_target("");
+    EXPECT_GT(compared, 200u);
+    EXPECT_GT(ruled_out, 200u);
+    EXPECT_GT(passed, compared / 10);
+    EXPECT_LT(passed, compared);
+  }
+}
+
 TEST(SelfCollision, AFoldedClothHasExactlyTheBruteForceContacts) {
   const FoldedCloth cloth(24);
   SelfCollision collision(cloth.grid.triangle_indices, cloth.state.size());

@@ -35,7 +35,18 @@ void UniformGrid::build(std::span<const Aabb> boxes, Real cell_size) {
     extent_sum += largest_extent(box);
   }
   const double large = kLargeBoxPerMean * extent_sum / double(std::max<std::size_t>(n, 1));
-  for (auto& members : members_) members.clear();
+  // Every buffer sized for all n boxes in either level: which boxes count as large moves
+  // from build to build, and a settled run must not allocate when it does.
+  for (auto& members : members_) members.clear(), members.reserve(n);
+  for (Level& level : levels_) {
+    level.grid_size = n;
+    level.cell_start.reserve(kCellsPerBox * n + 64 + 1);
+    level.entry_index.reserve(n + Level::kPadding);
+    for (int axis = 0; axis < 3; ++axis)
+      level.entry_lo[axis].reserve(n + Level::kPadding),
+          level.entry_hi[axis].reserve(n + Level::kPadding);
+  }
+  cell_of_box_.reserve(n);
   for (std::size_t i = 0; i < n; ++i)
     members_[largest_extent(boxes[i]) > large ? 1 : 0].push_back(std::uint32_t(i));
   for (int l = 0; l < 2; ++l) build_level(levels_[l], boxes, members_[l], cell_size);

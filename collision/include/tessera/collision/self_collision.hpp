@@ -28,7 +28,8 @@
 // straight path at the detection, its reference
 //
 //   R(τ) = A + τ V       τ the substeps since the build, V = Δ − ū its motion then against
-//                        the bulk's (ū the median motion), A its start then (less the bulk's way)
+//                        the bulk's (ū the median motion, of an even sample), A its start
+//                        then (less the bulk's way)
 //
 // and a budget b = skin + k (k + 1) |Δ − Δ_prev| (k = motion_scale; Δ_prev its motion of the
 // substep before: the room for k substeps of the change of its motion). On a later substep

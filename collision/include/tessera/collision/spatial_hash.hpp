@@ -159,6 +159,7 @@ class UniformGrid {
     std::int64_t dims[3] = {1, 1, 1};
     std::vector<std::uint32_t> cell_start;   // cells + 1 offsets into the entries
     std::size_t count = 0;                   // boxes in this level
+    std::size_t grid_size = 0;               // boxes in both levels (the scan's buffer)
     std::vector<std::uint32_t> entry_index;  // by cell (x fastest), then box index
     // The entries' boxes by axis (structure of arrays, for the SIMD scan), kPadding more
     // entries that overlap nothing at the end (entry_index is padded too).
@@ -200,7 +201,7 @@ void UniformGrid::Level::scan(const Aabb& query, std::uint32_t lowest_index, Vis
   // with room for every entry of the level.
   if (x0 > x1 || y0 > y1 || z0 > z1) return;  // a query box with lo above hi meets nothing
   thread_local std::vector<std::uint32_t> hits;
-  if (hits.size() < count) hits.resize(count);
+  if (hits.size() < grid_size) hits.resize(grid_size);
   const detail::GridLevelView view{{entry_lo[0].data(), entry_lo[1].data(), entry_lo[2].data()},
                                    {entry_hi[0].data(), entry_hi[1].data(), entry_hi[2].data()},
                                    entry_index.data(),

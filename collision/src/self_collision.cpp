@@ -274,6 +274,27 @@ struct TriangleBatch {
   }
 };
 
+/// Calls visit(m) for each member m of `leaves` whose box at the last build (its lanes in
+/// `fields`, after `coordinates` fields) overlaps `box`: the leaf grid, then each lane's box.
+template <std::size_t Fields, class Visit>
+void for_each_built_box_meeting(const detail::PrimitiveLeaves& leaves,
+                                const detail::LeafFields<Fields>& fields, std::size_t coordinates,
+                                const Aabb& box, Visit&& visit) {
+  leaves.grid().for_each_overlap(box, [&](std::uint32_t leaf) {
+    const std::uint32_t* members = leaves.members(leaf);
+    const Real* lo[3], *hi[3];
+    for (std::size_t axis = 0; axis < 3; ++axis)
+      lo[axis] = fields.block(leaf, coordinates + detail::kLeafLo + axis),
+      hi[axis] = fields.block(leaf, coordinates + detail::kLeafHi + axis);
+    for (std::size_t k = 0; k < detail::PrimitiveLeaves::kLeafSize; ++k) {
+      bool meets = members[k] != detail::PrimitiveLeaves::kNone;
+      for (std::size_t axis = 0; meets && axis < 3; ++axis)
+        meets = lo[axis][k] <= box.hi[axis] && box.lo[axis] <= hi[axis][k];
+      if (meets) visit(members[k]);
+    }
+  });
+}
+
 detail::LeafQuery& leaf_query() {
   thread_local detail::LeafQuery query;
   return query;
@@ -496,9 +517,12 @@ void SelfCollision::refresh_references(const SelfCollisionSettings& settings) {
   const Real tau = Real(substep_);
   parallel_over(particle_count_,
                 [&](std::size_t i) { reference_[i] = anchor_[i] + tau * velocity_[i]; });
-  parallel_over(triangles_.size() / 3, [&](std::size_t t) { set_triangle_anchors(std::uint32_t(t)); });
+  // Budgets and velocity balls change with a re-anchoring only (the new primitives').
+  parallel_over(triangles_.size() / 3, [&](std::size_t t) {
+    set_triangle_anchors(std::uint32_t(t), new_triangle_[t] != 0);
+  });
   parallel_over(settings.edge_edge ? edges_.size() / 2 : 0,
-                [&](std::size_t e) { set_edge_anchors(std::uint32_t(e)); });
+                [&](std::size_t e) { set_edge_anchors(std::uint32_t(e), new_edge_[e] != 0); });
 }
 
 template <std::size_t N>
@@ -529,16 +553,14 @@ void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Re
     out.push_back({std::min(e, f), std::max(e, f), std::sqrt(squared) - allowed});
 }
 
-void SelfCollision::set_triangle_anchors(std::uint32_t t) {
+void SelfCollision::set_triangle_anchors(std::uint32_t t, bool with_ball) {
   TriangleAnchors& record = triangle_anchors_[t];
   const std::uint32_t ids[3] = {triangles_[3 * std::size_t(t)], triangles_[3 * std::size_t(t) + 1],
                                 triangles_[3 * std::size_t(t) + 2]};
-  Real budget = 0;
-  for (int j = 0; j < 3; ++j) {
+  for (int j = 0; j < 3; ++j)
     for (int axis = 0; axis < 3; ++axis) record.corner[j][axis] = reference_[ids[j]][axis];
-    budget = std::max(budget, budget_[ids[j]]);
-  }
-  record.budget = budget;
+  if (!with_ball) return;
+  record.budget = std::max({budget_[ids[0]], budget_[ids[1]], budget_[ids[2]]});
   velocity_ball(ids, record.centre, record.radius);
 }
 
@@ -564,11 +586,12 @@ void SelfCollision::add_triangle_point_candidates(std::uint32_t p, Real reach,
   }
 }
 
-void SelfCollision::set_edge_anchors(std::uint32_t e) {
+void SelfCollision::set_edge_anchors(std::uint32_t e, bool with_ball) {
   const std::uint32_t p = edges_[2 * e], q = edges_[2 * e + 1];
   EdgeAnchors& record = edge_anchors_[e];
   for (int axis = 0; axis < 3; ++axis)
     record.p[axis] = reference_[p][axis], record.q[axis] = reference_[q][axis];
+  if (!with_ball) return;
   record.budget = std::max(budget_[p], budget_[q]);
   const std::uint32_t ids[2] = {p, q};
   velocity_ball(ids, record.centre, record.radius);
@@ -683,8 +706,6 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   parallel_over(edge_queries,
                 [&](std::size_t e) { edge_boxes_[e] = edge_box(std::uint32_t(e), reach); });
 
-  member_grids_current_ = false;  // built at the first re-box (rebox())
-
   // The leaves (primitive_leaves.hpp): ordered once, by the references of the first build;
   // boxed by their members' boxes; the triangles' and edges' records as lanes.
   Leaves& leaves = *leaves_;
@@ -703,11 +724,6 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
     leaves.triangle_fields.resize(leaves.triangles.leaf_count());
     leaves.edge_fields.resize(leaves.edges.leaf_count());
     leaves_ordered_ = true;
-    // The re-boxes' grids too, this once: their buffers then exist from the first step, and a
-    // settled run allocates nothing at its first re-box.
-    triangle_grid_.build(triangle_boxes_);
-    edge_grid_.build(edge_boxes_);
-    member_grids_current_ = true;
   }
   constexpr std::size_t kLanes = detail::PrimitiveLeaves::kLeafSize;
   const auto parallel = [](std::size_t n, auto&& body) { parallel_over(n, body); };
@@ -965,12 +981,6 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   if (double(reboxed) > kReboxedShare * double(triangle_count + edges_.size() / 2)) return false;
   std::sort(new_triangles_.begin(), new_triangles_.end());
   std::sort(new_edges_.begin(), new_edges_.end());
-  // The build's boxes in grids of their own, once per build: re-boxed primitives query them.
-  if (!member_grids_current_) {
-    triangle_grid_.build(triangle_boxes_);
-    edge_grid_.build(edge_boxes_);
-    member_grids_current_ = true;
-  }
 
   // Re-anchor the particles that outran their room on the path of their motion now, in the
   // frame; their departures under `now` measured again (about 0: on the path, up to
@@ -1019,9 +1029,10 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
         const std::size_t first = buffer.size();
         const Aabb box = vertex_box(p, reach);
         add_triangle_point_candidates(p, reach, positions, buffer, [&](auto&& visit) {
-          triangle_grid_.for_each_overlap(box, [&](std::uint32_t t) {
-            if (!reboxed_triangle_[t]) visit(t);
-          });
+          for_each_built_box_meeting(leaves_->triangles, leaves_->triangle_fields, 9, box,
+                                     [&](std::uint32_t t) {
+                                       if (!reboxed_triangle_[t]) visit(t);
+                                     });
           reboxed_triangle_grid_.for_each_overlap(
               box, [&](std::uint32_t entry) { visit(reboxed_triangles_[entry]); });
         });
@@ -1066,9 +1077,10 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
           const std::uint32_t e = new_edges_[k];
           const Aabb box = edge_box(e, reach);
           add_edge_edge_candidates(e, reach, positions, buffer, [&](auto&& visit) {
-            edge_grid_.for_each_overlap(box, [&](std::uint32_t f) {
-              if (!reboxed_edge_[f]) visit(f);
-            });
+            for_each_built_box_meeting(leaves_->edges, leaves_->edge_fields, 6, box,
+                                       [&](std::uint32_t f) {
+                                         if (!reboxed_edge_[f]) visit(f);
+                                       });
             reboxed_edge_grid_.for_each_overlap(box, [&](std::uint32_t entry) {
               const std::uint32_t f = reboxed_edges_[entry];
               // A pair of two new edges is found from both: kept from the lower.

@@ -320,8 +320,9 @@ class SelfCollision {
   void add_edge_edge_candidates(std::uint32_t e, Real reach,
                                 const SelfCollisionPositions& positions,
                                 std::vector<Candidate>& out, Collect&& collect) const;
-  /// Edge e's record in edge_anchors_, from its particles' anchors and budgets.
-  void set_edge_anchors(std::uint32_t e);
+  /// Edge e's record in edge_anchors_, from its particles' references and, with `with_ball`,
+  /// budgets and velocities.
+  void set_edge_anchors(std::uint32_t e, bool with_ball = true);
   /// The same rule for vertex p and every triangle t that collect(visit) visits, their
   /// distances a vector at a time (triangle_distances.cpp), in the order visited. Reads
   /// triangle_anchors_.
@@ -329,8 +330,9 @@ class SelfCollision {
   void add_triangle_point_candidates(std::uint32_t p, Real reach,
                                      const SelfCollisionPositions& positions,
                                      std::vector<Candidate>& out, Collect&& collect) const;
-  /// Triangle t's record in triangle_anchors_.
-  void set_triangle_anchors(std::uint32_t t);
+  /// Triangle t's record in triangle_anchors_: its corners' references, and with `with_ball`
+  /// its budget and velocity ball (which change with a re-anchoring only).
+  void set_triangle_anchors(std::uint32_t t, bool with_ball = true);
   /// Every particle's departure from its room under `frame`, into departure_, and the
   /// rounding allowance of the filter's bound; with `outran_list`, also the particles that
   /// left their room (ascending), from the same squared lengths.
@@ -406,7 +408,6 @@ class SelfCollision {
     Real corner[3][3], budget, radius, centre[3], unused[2];
   };
   std::vector<TriangleAnchors> triangle_anchors_;
-  UniformGrid triangle_grid_, edge_grid_;
   std::vector<Pair> triangle_point_pairs_, edge_edge_pairs_;
   // The last detection's candidates, which refine() filters.
   std::vector<Candidate> candidate_triangle_point_, candidate_edge_edge_;
@@ -417,9 +418,6 @@ class SelfCollision {
   struct Leaves;
   std::unique_ptr<Leaves> leaves_;
   bool leaves_ordered_ = false;
-  /// Whether triangle_grid_ and edge_grid_ hold this build's boxes: re-boxes query them,
-  /// builds do not, so they are built at a build's first re-box.
-  bool member_grids_current_ = false;
   /// The candidates sorted by (first, second), first below `keys` (a counting sort by first).
   void sort_candidates(std::vector<Candidate>& candidates, std::size_t keys);
   std::vector<std::uint32_t> key_start_;

@@ -16,34 +16,37 @@ namespace tessera::detail {
 /// Items per chunk: large enough to amortise a task, small enough to balance 2-64 threads on
 /// a 128² cloth.
 inline constexpr std::size_t kCollisionChunk = 512;
+/// The same for leaves of 8 primitives (primitive_leaves.hpp), each a query of 8.
+inline constexpr std::size_t kLeafChunk = kCollisionChunk / 16;
 
 template <class T>
 class ChunkedOutput {
  public:
-  /// Runs produce(item, buffer) for every item in [0, count), chunks in parallel, and writes
-  /// the buffers in chunk order to `out` (overwritten).
+  /// Runs produce(item, buffer) for every item in [0, count), chunks of `chunk` items in
+  /// parallel, and writes the buffers in chunk order to `out` (overwritten).
   template <class Produce>
-  void run(std::size_t count, Produce&& produce, std::vector<T>& out) {
+  void run(std::size_t count, Produce&& produce, std::vector<T>& out,
+           std::size_t chunk = kCollisionChunk) {
     run_chunks(
         count,
         [&](std::size_t begin, std::size_t end, std::vector<T>& buffer) {
           for (std::size_t item = begin; item < end; ++item) produce(item, buffer);
         },
-        out);
+        out, chunk);
   }
   /// The same with produce(begin, end, buffer) called once per chunk [begin, end): for a
   /// body that works on a chunk's items together (a vector at a time).
   template <class ProduceChunk>
-  void run_chunks(std::size_t count, ProduceChunk&& produce, std::vector<T>& out) {
-    const std::size_t chunks = (count + kCollisionChunk - 1) / kCollisionChunk;
+  void run_chunks(std::size_t count, ProduceChunk&& produce, std::vector<T>& out,
+                  std::size_t chunk = kCollisionChunk) {
+    const std::size_t chunks = (count + chunk - 1) / chunk;
     if (buffers_.size() < chunks) buffers_.resize(chunks);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                         for (std::size_t c = range.begin(); c != range.end(); ++c) {
                           std::vector<T>& buffer = buffers_[c];
                           buffer.clear();
-                          produce(c * kCollisionChunk, std::min(count, (c + 1) * kCollisionChunk),
-                                  buffer);
+                          produce(c * chunk, std::min(count, (c + 1) * chunk), buffer);
                         }
                       });
     std::size_t total = 0;

@@ -813,7 +813,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
           }
         }
       },
-      candidate_triangle_point_);
+      candidate_triangle_point_, detail::kLeafChunk);
   sort_candidates(candidate_triangle_point_, particle_count_);
 
   // Edge–edge: each edge of a leaf against every edge of the leaves at or after its own that
@@ -871,7 +871,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
           }
         }
       },
-      candidate_edge_edge_);
+      candidate_edge_edge_, detail::kLeafChunk);
   sort_candidates(candidate_edge_edge_, edge_count);
   return bulk;
 }

@@ -67,9 +67,10 @@ class PrimitiveLeaves {
   /// Leaf l's members (kLeafSize entries, kNone past the primitives).
   const std::uint32_t* members(std::size_t leaf) const { return member_.data() + leaf * kLeafSize; }
 
-  /// Each leaf's box: the union of its members' (`boxes` by primitive).
+  /// Each leaf's box: the union of its members' (`boxes` by primitive); with `grid`, the
+  /// leaves' grid over them too (the leaves that are met, not only querying).
   template <class ParallelOver>
-  void box(std::span<const Aabb> boxes, ParallelOver&& parallel_over) {
+  void box(std::span<const Aabb> boxes, ParallelOver&& parallel_over, bool grid = true) {
     leaf_boxes_.resize(leaf_count());
     parallel_over(leaf_count(), [&](std::size_t leaf) {
       const std::uint32_t* m = members(leaf);
@@ -80,7 +81,7 @@ class PrimitiveLeaves {
           box.hi[axis] = std::max(box.hi[axis], boxes[m[k]].hi[axis]);
       leaf_boxes_[leaf] = box;
     });
-    grid_.build(leaf_boxes_);
+    if (grid) grid_.build(leaf_boxes_);
   }
   const Aabb& leaf_box(std::size_t leaf) const { return leaf_boxes_[leaf]; }
   const UniformGrid& grid() const { return grid_; }
@@ -93,7 +94,7 @@ class PrimitiveLeaves {
 };
 
 /// Fields per member of every leaf, as blocks of kLeafSize lanes (a padding member's lanes
-/// repeat the leaf's first member: measured, then dropped by its kNone).
+/// repeat a member's with an empty box: they pair with nothing).
 template <std::size_t Fields>
 class LeafFields {
  public:

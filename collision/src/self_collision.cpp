@@ -14,8 +14,8 @@
 //                      what refine() does on later substeps)
 //
 // Both candidate lists come out of chunked loops (chunked_output.hpp) and a counting sort:
-// sorted by key, whatever the thread count. Re-boxes query the primitives' own boxes in
-// grids of their own (built at a build's first re-box).
+// sorted by key, whatever the thread count. Re-boxes query the same leaf grids, each met
+// leaf's members by their boxes of the build (re-boxed ones in a second grid of their own).
 #include <tessera/collision/self_collision.hpp>
 
 #include <algorithm>
@@ -548,7 +548,7 @@ void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Re
                                                         reference_[p2], reference_[p3]);
   const EdgeAnchors& own = edge_anchors_[e];
   const Real allowed = allowed_between(ball_of(own), edge_anchors_[f], substeps_allowed());
-  const Real within = reach + own.budget + edge_anchors_[f].budget + allowed;
+  const Real within = reach + edge_slack_ + own.budget + edge_anchors_[f].budget + allowed;
   if (squared < within * within)
     out.push_back({std::min(e, f), std::max(e, f), std::sqrt(squared) - allowed});
 }
@@ -620,7 +620,8 @@ void SelfCollision::add_edge_edge_candidates(std::uint32_t e, Real reach,
   // of the few within it: the same candidates as add_edge_edge_candidate, in the same order.
   const EdgeAnchors& record = edge_anchors_[e];
   batch.gather(edge_anchors_.data(), ball_of(record), substeps_allowed());
-  for (const std::uint32_t k : batch.measure(reference_[p0], reference_[p1], reach + record.budget)) {
+  for (const std::uint32_t k :
+       batch.measure(reference_[p0], reference_[p1], reach + edge_slack_ + record.budget)) {
     const std::uint32_t f = batch.edges[k];
     if (particles.may_touch(p0, p1, edges_[2 * f], edges_[2 * f + 1]))
       out.push_back({std::min(e, f), std::max(e, f), std::sqrt(batch.squared[k]) - batch.allowed[k]});
@@ -675,6 +676,10 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
     frame_origin_[i] = particles.start(std::uint32_t(i));
   });
   horizon_ = horizon_for(reach, settings);
+  // The edge pairs' rounding room (edge_slack_): the largest reference coordinate's share.
+  Real largest = 0;
+  for (const Vector3r& r : reference_) largest = std::max(largest, r.cwiseAbs().maxCoeff());
+  edge_slack_ = kAllowancePerCoordinate * largest;
   reboxed_triangle_.assign(triangle_count, 0);
   reboxed_edge_.assign(edge_count, 0);
   reboxed_triangles_.clear();
@@ -727,7 +732,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   }
   constexpr std::size_t kLanes = detail::PrimitiveLeaves::kLeafSize;
   const auto parallel = [](std::size_t n, auto&& body) { parallel_over(n, body); };
-  leaves.vertices.box(vertex_boxes_, parallel);
+  leaves.vertices.box(vertex_boxes_, parallel, /*grid=*/false);  // they query only
   leaves.triangles.box(triangle_boxes_, parallel);
   parallel_over(leaves.triangles.leaf_count(), [&](std::size_t leaf) {
     const std::uint32_t* members = leaves.triangles.members(leaf);
@@ -785,7 +790,8 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
 
   // Vertex–triangle: each vertex of a leaf against every triangle of the triangle leaves
   // its leaf's box meets, the distances a vector at a time (triangle_distances.cpp, the
-  // scalar rule's bits), then the topology of those within (not a corner, not all static).
+  // scalar rule's bits), the box overlap and topology (not a corner, not all static) as lane
+  // masks before the distance.
   chunks_->triangle_point_candidates.run(
       leaves.vertices.leaf_count(),
       [&](std::size_t leaf, std::vector<Candidate>& buffer) {
@@ -818,7 +824,8 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
 
   // Edge–edge: each edge of a leaf against every edge of the leaves at or after its own that
   // its leaf's box meets (in its own leaf, the edges after it), the distances a vector at a
-  // time (segment_distances.cpp, add_edge_edge_candidate's bits), then the topology.
+  // time (segment_distances.cpp: the box and topology as masks, then the scalar distance's
+  // bits with the querying edge first, hence edge_slack_ in the limit).
   chunks_->edge_edge_candidates.run(
       edge_queries > 0 ? leaves.edges.leaf_count() : 0,
       [&](std::size_t leaf, std::vector<Candidate>& buffer) {
@@ -853,13 +860,13 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
             // A point-like edge: the scalar rule, which handles it.
             for (std::size_t k = j + 1; k < query.leaves.size() * kLanes; ++k) {
               const std::uint32_t f = leaves.edges.members(query.leaves[k / kLanes])[k % kLanes];
-              if (f != detail::PrimitiveLeaves::kNone)
-                add_edge_edge_candidate(e, f, reach, positions, buffer);
+              if (f != detail::PrimitiveLeaves::kNone)  // the lower edge first, as the filter
+                add_edge_edge_candidate(std::min(e, f), std::max(e, f), reach, positions, buffer);
             }
             continue;
           }
           const std::size_t found = detail::segments_within_leaves(
-              p, q, reach + own_field(tail + detail::kLeafBudget, j), own,
+              p, q, reach + edge_slack_ + own_field(tail + detail::kLeafBudget, j), own,
               leaves.edge_fields.data(), query.leaves.data(), query.leaves.size(),
               query.squared.data(), query.allowed.data(), query.within.data());
           for (std::size_t w = 0; w < found; ++w) {
@@ -959,7 +966,7 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
                           const SelfCollisionSettings& settings, Real reach, const Frame& now) {
   const std::size_t triangle_count = triangles_.size() / 3;
   // New: the primitives of the particles that outran their room (N); reboxed: those and
-  // the ones reboxed since the build (C), whose entries in the main grids are stale.
+  // the ones reboxed since the build (C), whose boxes in the build's leaves are stale.
   new_triangle_.assign(triangle_count, 0);
   new_edge_.assign(edges_.size() / 2, 0);
   std::size_t reboxed = reboxed_triangles_.size() + reboxed_edges_.size();
@@ -993,6 +1000,7 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
     largest = std::max(largest, anchor_[i].cwiseAbs().maxCoeff());
   }
   departure_allowance_ = std::max(departure_allowance_, kAllowancePerCoordinate * largest);
+  edge_slack_ = std::max(edge_slack_, kAllowancePerCoordinate * largest);
   // Every reference and record at this substep: the new primitives are tested against the
   // others where both are now, with the horizon left.
   refresh_references(settings);
@@ -1012,7 +1020,7 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
 
   // Drop the candidates of the new primitives and find theirs again: the new vertices
   // against every triangle, the other vertices against the new triangles, the new edges
-  // against every edge. The main grids' entries of reboxed primitives are stale and skipped;
+  // against every edge. The build's leaves hold stale boxes of reboxed primitives, skipped;
   // their boxes now are in the second grids.
   new_vertex_.assign(particle_count_, 0);
   for (const std::uint32_t i : outran_) new_vertex_[i] = 1;

@@ -121,9 +121,9 @@ struct SelfCollisionSettings {
   Real margin = 0;
   /// Compression stiffness of the contact constraints, in [0, 1].
   Real stiffness = 1;
-  /// Whether to find edge–edge contacts. They take three quarters of the detection
-  /// (three edges per vertex, each a query of the edge grid); without them a crossing of
-  /// two edges whose vertices stay out of reach of the other's triangles goes unseen.
+  /// Whether to find edge–edge contacts. They take most of the detection (three edges per
+  /// vertex, each measured against the edges near it); without them a crossing of two edges
+  /// whose vertices stay out of reach of the other's triangles goes unseen.
   /// update() builds again when this changes; refine() finds edge–edge contacts only among
   /// the candidates of a detection that had it on.
   bool edge_edge = true;
@@ -389,6 +389,12 @@ class SelfCollision {
   // corners: the filter's bound, this substep's.
   std::vector<Real> vertex_spread_, triangle_spread_, edge_spread_;
   Real departure_allowance_ = 0;      // rounding room of the filter's bound
+  /// Rounding room of the edge pairs' candidate rule (kAllowancePerCoordinate × the largest
+  /// reference coordinate): a build measures a pair from whichever edge's leaf comes first,
+  /// the filter from the lower edge, and the segment distance is not symmetric to the bit; a
+  /// pair at the limit in the filter's bits stays a candidate (more candidates, not fewer
+  /// contacts).
+  Real edge_slack_ = 0;
   std::vector<std::uint32_t> outran_scratch_;  // measure_departures' list when none is asked
   /// The allowance per unit of the largest coordinate.
   static constexpr Real kAllowancePerCoordinate = Real(1e-5);

@@ -101,7 +101,8 @@ std::size_t SegmentsWithin(const Vector3r& p1, const Vector3r& q1, Real own,
   std::size_t found = 0;
   ForEachVector(p1, q1, batch, [&](auto d, std::size_t i, auto distance) {
     hn::StoreU(distance, d, squared + i);
-    // within = own + budget, compared as within · within (own = reach + the edge's budget, budget = the other's plus the allowance).
+    // within = own + budget, compared as within · within (own = reach + the edge's budget,
+    // budget = the other's plus the allowance).
     const auto reach = hn::Add(hn::Set(d, own), hn::LoadU(d, budget + i));
     found = AppendPassing(d, hn::Lt(distance, hn::Mul(reach, reach)), i, batch.count, within,
                           found);

@@ -4,6 +4,7 @@
 // same on 1 and 2 threads.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -566,6 +567,28 @@ TEST(SelfCollision, AFoldedClothHasExactlyTheBruteForceContacts) {
   const Contacts expected = brute_force(cloth, collision, settings.thickness + settings.margin);
   EXPECT_GT(expected.triangle_point_count(), 20u);
   EXPECT_GT(expected.edge_edge_count(), 20u);
+  EXPECT_EQ(contacts.triangle_point, expected.triangle_point);
+  EXPECT_EQ(contacts.edge_edge, expected.edge_edge);
+}
+
+TEST(SelfCollision, APointLikeEdgeHasExactlyTheBruteForceContacts) {
+  // A triangle with two corners at one place has a point-like edge (0, 1), which a build
+  // measures by the scalar rule; it lies 0.05 under the edge (3, 4) of another triangle,
+  // within the reach 0.1.
+  FoldedCloth cloth(2);  // for brute_force: its state is replaced
+  const std::vector<Vector3r> positions = {{0, 0, 0},     {0, 0, 0},    {0, 0, 1},
+                                           {-1, Real(0.05), 0}, {1, Real(0.05), 0}, {0, Real(0.05), 2}};
+  cloth.state = ParticleState(positions, std::vector<Real>(positions.size(), Real(1)));
+  const std::vector<std::uint32_t> triangles = {0, 1, 2, 3, 4, 5};
+  SelfCollision collision(triangles, positions.size());
+  const SelfCollisionSettings settings{Real(0.08), Real(0.02)};
+  Contacts contacts;
+  collision.detect(cloth.state, settings, contacts);
+  const Contacts expected = brute_force(cloth, collision, settings.thickness + settings.margin);
+  const std::vector<ParticleIndex> point_like_pair = {0, 1, 3, 4};
+  EXPECT_NE(std::search(expected.edge_edge.begin(), expected.edge_edge.end(),
+                        point_like_pair.begin(), point_like_pair.end()),
+            expected.edge_edge.end());
   EXPECT_EQ(contacts.triangle_point, expected.triangle_point);
   EXPECT_EQ(contacts.edge_edge, expected.edge_edge);
 }

@@ -82,6 +82,41 @@ HWY_INLINE hwy::HWY_NAMESPACE::Mask<D> MayPairAt(D d, const detail::BlockQuery& 
   return m;
 }
 
+/// The loop of a leaf query (segments_within_leaves, triangles_within_leaves): for each met
+/// leaf's vectors of lanes, the lanes that may pair, their allowance, their squared distance
+/// from distance_at(d, leaf fields, i), and the passing positions b · kBlockLanes + lane.
+template <std::size_t Coordinates, class DistanceAt>
+HWY_INLINE std::size_t LanesWithinLeaves(Real own, const detail::BlockQuery& query,
+                                         const Real* leaf_data, const std::uint32_t* leaves,
+                                         std::size_t leaf_count, Real* squared, Real* allowed,
+                                         std::uint32_t* within, DistanceAt&& distance_at) {
+  namespace hn = hwy::HWY_NAMESPACE;
+  const hn::CappedTag<Real, detail::kBlockLanes> d;
+  const std::size_t width = hn::Lanes(d);
+  const auto reach_own = hn::Set(d, own);
+  constexpr std::size_t kFields = Coordinates + detail::kLeafTailFields;
+  std::size_t found = 0;
+  for (std::size_t b = 0; b < leaf_count; ++b) {
+    const Real* base = leaf_data + std::size_t(leaves[b]) * kFields * detail::kBlockLanes;
+    const detail::BlockBatch lanes = detail::block_lanes(base, Coordinates);
+    for (std::size_t i = 0; i < detail::kBlockLanes; i += width) {
+      const auto may_pair = MayPairAt(d, query, lanes, i);
+      if (hn::AllFalse(d, may_pair)) continue;
+      const std::size_t out = b * detail::kBlockLanes + i;
+      const auto closing = AllowanceAt(d, query, lanes.balls, i);
+      hn::StoreU(closing, d, allowed + out);
+      const auto distance = distance_at(d, base, i);
+      hn::StoreU(distance, d, squared + out);
+      // within = own + (budget + allowed), the batched build's order.
+      const auto reach =
+          hn::Add(reach_own, hn::Add(hn::LoadU(d, lanes.balls.budget + i), closing));
+      found = AppendPassing(d, hn::And(may_pair, hn::Lt(distance, hn::Mul(reach, reach))), out,
+                            out + width, within, found);
+    }
+  }
+  return found;
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace tessera
 HWY_AFTER_NAMESPACE();

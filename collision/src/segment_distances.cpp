@@ -138,36 +138,18 @@ std::size_t SegmentsWithinLeaves(const Vector3r& p1, const Vector3r& q1, Real ow
                                  const std::uint32_t* leaves, std::size_t leaf_count,
                                  Real* squared, Real* allowed, std::uint32_t* within) {
   const hn::CappedTag<Real, detail::kBlockLanes> d;
-  const std::size_t width = hn::Lanes(d);
   const auto p1x = hn::Set(d, p1.x()), p1y = hn::Set(d, p1.y()), p1z = hn::Set(d, p1.z());
   const Vector3r d1s = q1 - p1;
   const auto d1x = hn::Set(d, d1s.x()), d1y = hn::Set(d, d1s.y()), d1z = hn::Set(d, d1s.z());
   const auto a = hn::Set(d, detail::dot3(d1s, d1s));
-  const auto reach_own = hn::Set(d, own);
-  constexpr std::size_t kFields = 6 + detail::kLeafTailFields;
-  std::size_t found = 0;
-  for (std::size_t b = 0; b < leaf_count; ++b) {
-    const Real* base = leaf_data + std::size_t(leaves[b]) * kFields * detail::kBlockLanes;
-    const auto at = [&](std::size_t field) { return base + field * detail::kBlockLanes; };
-    const detail::SegmentBatch segments{at(0), at(1), at(2), at(3), at(4), at(5),
-                                        detail::kBlockLanes};
-    const detail::BlockBatch lanes = detail::block_lanes(base, 6);
-    for (std::size_t i = 0; i < detail::kBlockLanes; i += width) {
-      const auto may_pair = MayPairAt(d, query, lanes, i);
-      if (hn::AllFalse(d, may_pair)) continue;
-      const std::size_t out = b * detail::kBlockLanes + i;
-      const auto closing = AllowanceAt(d, query, lanes.balls, i);
-      hn::StoreU(closing, d, allowed + out);
-      const auto distance = SquaredDistancesAt(d, segments, i, p1x, p1y, p1z, d1x, d1y, d1z, a);
-      hn::StoreU(distance, d, squared + out);
-      // within = own + (budget + allowed), the batched build's order.
-      const auto reach =
-          hn::Add(reach_own, hn::Add(hn::LoadU(d, lanes.balls.budget + i), closing));
-      found = AppendPassing(d, hn::And(may_pair, hn::Lt(distance, hn::Mul(reach, reach))), out,
-                            out + width, within, found);
-    }
-  }
-  return found;
+  return LanesWithinLeaves<6>(
+      own, query, leaf_data, leaves, leaf_count, squared, allowed, within,
+      [&](auto tag, const Real* base, std::size_t i) {
+        const auto at = [&](std::size_t field) { return base + field * detail::kBlockLanes; };
+        const detail::SegmentBatch segments{at(0), at(1), at(2), at(3), at(4), at(5),
+                                            detail::kBlockLanes};
+        return SquaredDistancesAt(tag, segments, i, p1x, p1y, p1z, d1x, d1y, d1z, a);
+      });
 }
 
 }  // namespace HWY_NAMESPACE

@@ -734,29 +734,34 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   const auto parallel = [](std::size_t n, auto&& body) { parallel_over(n, body); };
   leaves.vertices.box(vertex_boxes_, parallel, /*grid=*/false);  // they query only
   leaves.triangles.box(triangle_boxes_, parallel);
+  // Each leaf's lanes: the coordinates, then the tail (segment_distances.hpp, LeafField). A
+  // padding lane repeats the leaf's first member with an empty box: it pairs with nothing.
+  const auto fill_tail = [&](auto& fields, std::size_t leaf, std::size_t lane,
+                             std::size_t coordinates, const auto& record, const Aabb& box,
+                             const std::uint32_t* ids, std::size_t id_count) {
+    const auto field = [&](std::size_t f) -> Real& { return fields.block(leaf, coordinates + f)[lane]; };
+    field(detail::kLeafBudget) = record.budget;
+    field(detail::kLeafRadius) = record.radius;
+    bool all_static = true;
+    for (std::size_t j = 0; j < 3; ++j) {
+      field(detail::kLeafCentre + j) = record.centre[j];
+      field(detail::kLeafLo + j) = box.lo[j];
+      field(detail::kLeafHi + j) = box.hi[j];
+      field(detail::kLeafIds + j) = detail::id_lane(ids[std::min(j, id_count - 1)]);
+      if (j < id_count) all_static = all_static && positions.inverse_mass[ids[j]] == 0;
+    }
+    field(detail::kLeafStatic) = all_static ? Real(1) : Real(0);
+  };
   parallel_over(leaves.triangles.leaf_count(), [&](std::size_t leaf) {
     const std::uint32_t* members = leaves.triangles.members(leaf);
     for (std::size_t k = 0; k < kLanes; ++k) {
-      const TriangleAnchors& record =
-          triangle_anchors_[members[members[k] == detail::PrimitiveLeaves::kNone ? 0 : k]];
+      const bool padding = members[k] == detail::PrimitiveLeaves::kNone;
+      const std::uint32_t t = members[padding ? 0 : k];
+      const TriangleAnchors& record = triangle_anchors_[t];
       for (std::size_t j = 0; j < 9; ++j)
         leaves.triangle_fields.block(leaf, j)[k] = record.corner[j / 3][j % 3];
-      leaves.triangle_fields.block(leaf, 9)[k] = record.budget;
-      for (std::size_t j = 0; j < 3; ++j) leaves.triangle_fields.block(leaf, 10 + j)[k] = record.centre[j];
-      leaves.triangle_fields.block(leaf, 13)[k] = record.radius;
-      // A padding lane's box is empty: it pairs with nothing.
-      const Aabb box = members[k] == detail::PrimitiveLeaves::kNone ? kEmptyBox : triangle_boxes_[members[k]];
-      for (std::size_t j = 0; j < 3; ++j)
-        leaves.triangle_fields.block(leaf, 14 + j)[k] = box.lo[j],
-        leaves.triangle_fields.block(leaf, 17 + j)[k] = box.hi[j];
-      const std::uint32_t t = members[members[k] == detail::PrimitiveLeaves::kNone ? 0 : k];
-      bool all_static = true;
-      for (std::size_t j = 0; j < 3; ++j) {
-        const std::uint32_t corner = triangles_[3 * std::size_t(t) + j];
-        leaves.triangle_fields.block(leaf, 20 + j)[k] = detail::id_lane(corner);
-        all_static = all_static && positions.inverse_mass[corner] == 0;
-      }
-      leaves.triangle_fields.block(leaf, 23)[k] = all_static ? Real(1) : Real(0);
+      fill_tail(leaves.triangle_fields, leaf, k, 9, record, padding ? kEmptyBox : triangle_boxes_[t],
+                triangles_.data() + 3 * std::size_t(t), 3);
     }
   });
   if (edge_queries > 0) {
@@ -764,25 +769,14 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
     parallel_over(leaves.edges.leaf_count(), [&](std::size_t leaf) {
       const std::uint32_t* members = leaves.edges.members(leaf);
       for (std::size_t k = 0; k < kLanes; ++k) {
-        const EdgeAnchors& record =
-            edge_anchors_[members[members[k] == detail::PrimitiveLeaves::kNone ? 0 : k]];
+        const bool padding = members[k] == detail::PrimitiveLeaves::kNone;
+        const std::uint32_t e = members[padding ? 0 : k];
+        const EdgeAnchors& record = edge_anchors_[e];
         for (std::size_t j = 0; j < 3; ++j)
           leaves.edge_fields.block(leaf, j)[k] = record.p[j],
-          leaves.edge_fields.block(leaf, 3 + j)[k] = record.q[j],
-          leaves.edge_fields.block(leaf, 7 + j)[k] = record.centre[j];
-        leaves.edge_fields.block(leaf, 6)[k] = record.budget;
-        leaves.edge_fields.block(leaf, 10)[k] = record.radius;
-        const Aabb box = members[k] == detail::PrimitiveLeaves::kNone ? kEmptyBox : edge_boxes_[members[k]];
-        for (std::size_t j = 0; j < 3; ++j)
-          leaves.edge_fields.block(leaf, 11 + j)[k] = box.lo[j],
-          leaves.edge_fields.block(leaf, 14 + j)[k] = box.hi[j];
-        const std::uint32_t e = members[members[k] == detail::PrimitiveLeaves::kNone ? 0 : k];
-        const std::uint32_t p = edges_[2 * std::size_t(e)], q = edges_[2 * std::size_t(e) + 1];
-        leaves.edge_fields.block(leaf, 17)[k] = detail::id_lane(p);
-        leaves.edge_fields.block(leaf, 18)[k] = leaves.edge_fields.block(leaf, 19)[k] =
-            detail::id_lane(q);
-        leaves.edge_fields.block(leaf, 20)[k] =
-            positions.inverse_mass[p] == 0 && positions.inverse_mass[q] == 0 ? Real(1) : Real(0);
+          leaves.edge_fields.block(leaf, 3 + j)[k] = record.q[j];
+        fill_tail(leaves.edge_fields, leaf, k, 6, record, padding ? kEmptyBox : edge_boxes_[e],
+                  edges_.data() + 2 * std::size_t(e), 2);
       }
     });
   }

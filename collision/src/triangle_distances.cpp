@@ -119,32 +119,15 @@ std::size_t TrianglesWithinLeaves(const Vector3r& p, Real own, const detail::Blo
                                   std::size_t leaf_count, Real* squared, Real* allowed,
                                   std::uint32_t* within) {
   const hn::CappedTag<Real, detail::kBlockLanes> d;
-  const std::size_t width = hn::Lanes(d);
   const auto px = hn::Set(d, p.x()), py = hn::Set(d, p.y()), pz = hn::Set(d, p.z());
-  const auto reach_own = hn::Set(d, own);
-  constexpr std::size_t kFields = 9 + detail::kLeafTailFields;
-  std::size_t found = 0;
-  for (std::size_t b = 0; b < leaf_count; ++b) {
-    const Real* base = leaf_data + std::size_t(leaves[b]) * kFields * detail::kBlockLanes;
-    const auto at = [&](std::size_t field) { return base + field * detail::kBlockLanes; };
-    const detail::TriangleBatch triangles{at(0), at(1), at(2), at(3), at(4), at(5),
-                                          at(6), at(7), at(8), nullptr, detail::kBlockLanes};
-    const detail::BlockBatch lanes = detail::block_lanes(base, 9);
-    for (std::size_t i = 0; i < detail::kBlockLanes; i += width) {
-      const auto may_pair = MayPairAt(d, query, lanes, i);
-      if (hn::AllFalse(d, may_pair)) continue;
-      const std::size_t out = b * detail::kBlockLanes + i;
-      const auto closing = AllowanceAt(d, query, lanes.balls, i);
-      hn::StoreU(closing, d, allowed + out);
-      const auto distance = SquaredTriangleDistancesAt(d, triangles, i, px, py, pz);
-      hn::StoreU(distance, d, squared + out);
-      const auto reach =
-          hn::Add(reach_own, hn::Add(hn::LoadU(d, lanes.balls.budget + i), closing));
-      found = AppendPassing(d, hn::And(may_pair, hn::Lt(distance, hn::Mul(reach, reach))), out,
-                            out + width, within, found);
-    }
-  }
-  return found;
+  return LanesWithinLeaves<9>(
+      own, query, leaf_data, leaves, leaf_count, squared, allowed, within,
+      [&](auto tag, const Real* base, std::size_t i) {
+        const auto at = [&](std::size_t field) { return base + field * detail::kBlockLanes; };
+        const detail::TriangleBatch triangles{at(0), at(1), at(2), at(3), at(4), at(5),
+                                              at(6), at(7), at(8), nullptr, detail::kBlockLanes};
+        return SquaredTriangleDistancesAt(tag, triangles, i, px, py, pz);
+      });
 }
 
 }  // namespace HWY_NAMESPACE

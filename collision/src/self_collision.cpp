@@ -550,7 +550,7 @@ void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Re
   const Real allowed = allowed_between(ball_of(own), edge_anchors_[f], substeps_allowed());
   const Real within = reach + edge_slack_ + own.budget + edge_anchors_[f].budget + allowed;
   if (squared < within * within)
-    out.push_back({std::min(e, f), std::max(e, f), std::sqrt(squared) - allowed});
+    out.push_back(candidate_of(std::min(e, f), std::max(e, f), squared, allowed, substeps_allowed()));
 }
 
 void SelfCollision::set_triangle_anchors(std::uint32_t t, bool with_ball) {
@@ -582,7 +582,7 @@ void SelfCollision::add_triangle_point_candidates(std::uint32_t p, Real reach,
     const std::uint32_t t = batch.triangles[k];
     const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
     if (p == a || p == b || p == c || particles.all_static({p, a, b, c})) continue;
-    out.push_back({p, t, std::sqrt(batch.squared[k]) - batch.allowed[k]});
+    out.push_back(candidate_of(p, t, batch.squared[k], batch.allowed[k], substeps_allowed()));
   }
 }
 
@@ -624,7 +624,8 @@ void SelfCollision::add_edge_edge_candidates(std::uint32_t e, Real reach,
        batch.measure(reference_[p0], reference_[p1], reach + edge_slack_ + record.budget)) {
     const std::uint32_t f = batch.edges[k];
     if (particles.may_touch(p0, p1, edges_[2 * f], edges_[2 * f + 1]))
-      out.push_back({std::min(e, f), std::max(e, f), std::sqrt(batch.squared[k]) - batch.allowed[k]});
+      out.push_back(candidate_of(std::min(e, f), std::max(e, f), batch.squared[k], batch.allowed[k],
+                                 substeps_allowed()));
   }
 }
 
@@ -809,7 +810,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
           for (std::size_t w = 0; w < found; ++w) {
             const std::uint32_t k = query.within[w];
             const std::uint32_t t = leaves.triangles.members(query.leaves[k / kLanes])[k % kLanes];
-            buffer.push_back({p, t, std::sqrt(query.squared[k]) - query.allowed[k]});
+            buffer.push_back(candidate_of(p, t, query.squared[k], query.allowed[k], steps));
           }
         }
       },
@@ -867,8 +868,8 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
             const std::uint32_t k = query.within[w];
             if (k <= j) continue;  // the own leaf's earlier edges, and itself
             const std::uint32_t f = leaves.edges.members(query.leaves[k / kLanes])[k % kLanes];
-            buffer.push_back({std::min(e, f), std::max(e, f),
-                              std::sqrt(query.squared[k]) - query.allowed[k]});
+            buffer.push_back(candidate_of(std::min(e, f), std::max(e, f), query.squared[k],
+                                          query.allowed[k], steps));
           }
         }
       },
@@ -1203,6 +1204,9 @@ void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
   // Past this bound on d_start − max |Δp − Δx| a candidate cannot be a contact (the bound
   // and its allowance are at the top of self_collision.hpp).
   const Real ruled_out = reach + Real(1e-3) * reach + departure_allowance_;
+  // The substeps of the horizon after this one: each candidate's bound is that many
+  // substeps of its relative motion above its least.
+  const Real left = Real(horizon_ > substep_ ? horizon_ - substep_ : 0);
   const std::size_t chunks =
       (std::max(candidate_triangle_point_.size(), candidate_edge_edge_.size()) +
        detail::kCollisionChunk - 1) / detail::kCollisionChunk;
@@ -1234,7 +1238,8 @@ void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
       [&](std::size_t k, std::vector<Pair>& buffer) {
         const Candidate candidate = candidate_triangle_point_[k];
         const std::uint32_t p = candidate.first, t = candidate.second;
-        if (candidate.bound - vertex_spread_[p] - triangle_spread_[t] > ruled_out)
+        if (candidate.bound + left * candidate.rate - vertex_spread_[p] - triangle_spread_[t] >
+            ruled_out)
           return;
         const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
         ++chunks_->measured[k / detail::kCollisionChunk].measured;
@@ -1259,7 +1264,7 @@ void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
         std::size_t measured = 0;
         for (std::size_t k = begin; k < end; ++k) {
           const Candidate candidate = candidate_edge_edge_[k];
-          if (candidate.bound - edge_spread_[candidate.first] -
+          if (candidate.bound + left * candidate.rate - edge_spread_[candidate.first] -
                   edge_spread_[candidate.second] >
               ruled_out)
             continue;

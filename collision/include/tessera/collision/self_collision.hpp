@@ -254,12 +254,20 @@ class SelfCollision {
   struct Pair {
     std::uint32_t first, second;
   };
-  /// A candidate pair and the least the distance of its primitives' references can be over
-  /// the horizon, less one substep of their relative motion: d_c − (T − τ_c + 1) ρ.
+  /// A candidate pair, the least the distance of its primitives' references can be over
+  /// the horizon, less one substep of their relative motion: d_c − (T − τ_c + 1) ρ, and ρ,
+  /// the most that relative motion closes per substep: at substep τ the least is
+  /// bound + (T − τ) ρ.
   struct Candidate {
     std::uint32_t first, second;
-    Real bound;
+    Real bound, rate;
   };
+  /// The candidate of a pair at squared distance `squared` whose relative motion closes
+  /// `allowed` over `steps` substeps (d_c = √squared, ρ = allowed / steps).
+  static Candidate candidate_of(std::uint32_t first, std::uint32_t second, Real squared,
+                                Real allowed, Real steps) {
+    return {first, second, std::sqrt(squared) - allowed, allowed / steps};
+  }
   /// How far a particle has left its room this substep: its way since it was anchored
   /// (w, in the frame) and its motion against the bulk's (m).
   struct Departure {

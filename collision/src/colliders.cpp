@@ -188,6 +188,26 @@ SurfaceQuery closest_surface(const Collider& collider, const Vector3r& p) {
   return std::visit([&](const auto& shape) { return surface_of(shape, p); }, collider);
 }
 
+namespace {
+
+/// Whether p is certainly farther than `reach` from a ball's surface, from its squared
+/// distance to the centre alone: the surface query's |p − centre| − radius ≥ reach there, so
+/// its three roots are spared for the particles far from a sphere (most of a cloth). The
+/// room of 10⁻⁴ of radius + reach is far above their rounding: the same contacts.
+bool beyond_ball(const Vector3r& centre, Real radius, const Vector3r& p, Real reach) {
+  const Real beyond = (radius + reach) * (Real(1) + Real(1e-4));
+  return (p - centre).squaredNorm() > beyond * beyond;
+}
+
+/// Whether p is certainly out of a collider's reach without its surface query (spheres
+/// only; the other shapes' queries are cheap or have their own bounds).
+bool certainly_beyond(const Collider& collider, const Vector3r& p, Real reach) {
+  const auto* sphere = std::get_if<SphereCollider>(&collider);
+  return sphere && beyond_ball(sphere->centre, sphere->radius, p, reach);
+}
+
+}  // namespace
+
 void ColliderHits::clear() {
   particles.clear();
   normals.clear();
@@ -250,6 +270,7 @@ void find_collider_contacts(std::span<const Collider> colliders, const ParticleS
               emit(surface.normal, surface.point);
             continue;
           }
+          if (certainly_beyond(colliders[c], p, reach)) continue;
           const SurfaceQuery surface = closest_surface(colliders[c], p);
           if (surface.distance < reach) emit(surface.normal, surface.point);
         }

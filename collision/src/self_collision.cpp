@@ -753,7 +753,18 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
     }
     field(detail::kLeafStatic) = all_static ? Real(1) : Real(0);
   };
+  // The records are in index order and the leaves in Morton order: the next leaf's records
+  // are fetched while this one's are copied.
+  const auto prefetch_members = [&](const detail::PrimitiveLeaves& of, std::size_t leaf,
+                                    const auto* records, const Aabb* boxes) {
+    if (leaf >= of.leaf_count()) return;
+    const std::uint32_t* members = of.members(leaf);
+    for (std::size_t k = 0; k < kLanes; ++k)
+      if (members[k] != detail::PrimitiveLeaves::kNone)
+        __builtin_prefetch(records + members[k]), __builtin_prefetch(boxes + members[k]);
+  };
   parallel_over(leaves.triangles.leaf_count(), [&](std::size_t leaf) {
+    prefetch_members(leaves.triangles, leaf + 1, triangle_anchors_.data(), triangle_boxes_.data());
     const std::uint32_t* members = leaves.triangles.members(leaf);
     for (std::size_t k = 0; k < kLanes; ++k) {
       const bool padding = members[k] == detail::PrimitiveLeaves::kNone;
@@ -768,6 +779,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
   if (edge_queries > 0) {
     leaves.edges.box(edge_boxes_, parallel);
     parallel_over(leaves.edges.leaf_count(), [&](std::size_t leaf) {
+      prefetch_members(leaves.edges, leaf + 1, edge_anchors_.data(), edge_boxes_.data());
       const std::uint32_t* members = leaves.edges.members(leaf);
       for (std::size_t k = 0; k < kLanes; ++k) {
         const bool padding = members[k] == detail::PrimitiveLeaves::kNone;
@@ -838,16 +850,21 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
         };
         for (std::size_t j = 0; j < kLanes && members[j] != detail::PrimitiveLeaves::kNone; ++j) {
           const std::uint32_t e = members[j];
-          // The edge's own record, from its leaf's lanes (in cache, unlike edge_anchors_[e]).
+          // The edge's own record and box, from its leaf's lanes (in cache, unlike
+          // edge_anchors_[e] and edge_boxes_[e]).
           const Vector3r p(own_field(0, j), own_field(1, j), own_field(2, j)),
               q(own_field(3, j), own_field(4, j), own_field(5, j));
           const std::size_t tail = 6;
+          Aabb box;
+          for (std::size_t axis = 0; axis < 3; ++axis)
+            box.lo[axis] = own_field(tail + detail::kLeafLo + axis, j),
+            box.hi[axis] = own_field(tail + detail::kLeafHi + axis, j);
           const detail::BlockQuery own{
               {own_field(tail + detail::kLeafCentre, j), own_field(tail + detail::kLeafCentre + 1, j),
                own_field(tail + detail::kLeafCentre + 2, j)},
               own_field(tail + detail::kLeafRadius, j),
               steps,
-              edge_boxes_[e],
+              box,
               {own_field(tail + detail::kLeafIds, j), own_field(tail + detail::kLeafIds + 1, j)},
               own_field(tail + detail::kLeafStatic, j) != 0};
           const Vector3r way = q - p;

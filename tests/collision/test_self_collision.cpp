@@ -636,6 +636,40 @@ TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContac
   EXPECT_FALSE(once.covers(s)) << "past the horizon";
 }
 
+TEST(SelfCollision, TheFilterCreditsTheMotionTheHorizonHasLeft) {
+  // The folded cloth's top layer moving down at a constant 0.05 h per substep, horizon 4.
+  // A candidate's bound at substep τ is its least over the horizon plus the (T − τ) ρ of
+  // relative motion still to come: early in the horizon the approaching layers' pairs are
+  // ruled out unmeasured, later they are measured. Each substep still lists exactly a
+  // detection's contacts.
+  FoldedCloth cloth(24);
+  ParticleState& s = cloth.state;
+  for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i] + (s.previous_y[i] - s.y[i]) / 4;
+  SelfCollision once(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
+  SelfCollisionSettings settings{Real(0.4) * cloth.spacing(), Real(0.1) * cloth.spacing()};
+  settings.skin = Real(0.01) * cloth.spacing();
+  settings.horizon = 4;
+  Contacts refined, direct;
+  once.detect(s, settings, refined);
+  std::vector<std::size_t> measured;
+  for (int substep = 1; substep <= 4; ++substep) {
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const Real step = s.y[i] - s.previous_y[i];
+      s.previous_y[i] = s.y[i];
+      s.y[i] += step;
+    }
+    ASSERT_TRUE(once.covers(s)) << substep;
+    once.refine(s, settings, refined);
+    every.detect(s, settings, direct);
+    EXPECT_EQ(refined.triangle_point, direct.triangle_point) << substep;
+    EXPECT_EQ(refined.edge_edge, direct.edge_edge) << substep;
+    measured.push_back(once.measured_candidate_count());
+  }
+  for (std::size_t k = 1; k < measured.size(); ++k)
+    EXPECT_GE(measured[k], measured[k - 1]) << "substep " << k + 1;
+  EXPECT_LT(2 * measured.front(), measured.back()) << "the first substep credits 3 ρ more";
+}
+
 TEST(SelfCollision, TheHorizonShortensForFastPathsAndUpdatesStayExact) {
   // The top layer moving down at a constant speed, horizon at most 8. At 0.02 h per substep
   // the paths close 3/4 of the reach (0.5 h) in 18 substeps: a build serves all 8 substeps

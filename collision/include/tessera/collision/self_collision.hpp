@@ -64,9 +64,10 @@
 // Filtering without measuring most candidates. Most candidates are neighbours in the cloth's
 // plane, a little beyond the reach, and stay there. A candidate keeps the least its bound can
 // be over the horizon, d_c − (T − τ_c + 1) ρ, and its ρ: at substep τ the bound is that plus
-// (T − τ) ρ (the motion still to come is not yet closed). A candidate whose bound at τ less
-// each side's largest w and m passes r (by a rounding allowance: 10⁻³ r plus 10⁻⁵ of the
-// largest coordinate) cannot be a contact: the filter skips its exact distance. The same
+// (T − τ) ρ (the motion still to come is not yet closed; credited 10⁻⁵ short, for the
+// rounding of two terms as large as T ρ). A candidate whose bound at τ less each side's
+// largest w and m passes r (by a rounding allowance: 10⁻³ r plus 10⁻⁵ of the largest
+// coordinate) cannot be a contact: the filter skips its exact distance. The same
 // contacts as measuring every candidate, at a fraction of the reads (on the drape, a fifth of
 // the candidates are measured; with the horizon's end bound instead of τ's, a third).
 //

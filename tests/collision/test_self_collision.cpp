@@ -593,33 +593,45 @@ TEST(SelfCollision, APointLikeEdgeHasExactlyTheBruteForceContacts) {
   EXPECT_EQ(contacts.edge_edge, expected.edge_edge);
 }
 
-TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContacts) {
-  // The folded cloth's top layer moves down at a constant 0.05 h per substep. A detection
-  // puts each particle on the path of its motion, so with a skin of 0.01 h for rounding it
-  // still covers each of the next four substeps of the same motion (the horizon: at that
-  // speed the paths close 3/4 of the reach in 7 substeps), and refined there lists what a
-  // detection at that substep finds (and no more).
-  FoldedCloth cloth(24);
+/// The folded cloth's top layer moving down at a constant 0.05 h per substep, a skin of
+/// 0.01 h for rounding and a horizon of 4 (at that speed the paths close 3/4 of the reach in
+/// 7 substeps).
+struct ApproachingLayers {
+  FoldedCloth cloth{24};
   ParticleState& s = cloth.state;
-  for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i] + (s.previous_y[i] - s.y[i]) / 4;
-  SelfCollision once(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
   SelfCollisionSettings settings{Real(0.4) * cloth.spacing(), Real(0.1) * cloth.spacing()};
-  settings.skin = Real(0.01) * cloth.spacing();
-  settings.horizon = 4;
-  Contacts first, refined, direct;
-  EXPECT_FALSE(once.covers(s)) << "no detection yet";
-  once.detect(s, settings, first);
-  const auto next_substep = [&] {  // one more substep of the same motion
+
+  ApproachingLayers() {
+    for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i] + (s.previous_y[i] - s.y[i]) / 4;
+    settings.skin = Real(0.01) * cloth.spacing();
+    settings.horizon = 4;
+  }
+  SelfCollision collision() const { return SelfCollision(cloth.grid.triangle_indices, s.size()); }
+  /// One more substep of the same motion.
+  void next_substep() {
     for (std::size_t i = 0; i < s.size(); ++i) {
       const Real step = s.y[i] - s.previous_y[i];
       s.previous_y[i] = s.y[i];
       s.y[i] += step;
     }
-  };
+  }
+};
+
+TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContacts) {
+  // The approaching layers: a detection puts each particle on the path of its motion, so it
+  // still covers each of the next four substeps of the same motion, and refined there lists
+  // what a detection at that substep finds (and no more).
+  ApproachingLayers layers;
+  ParticleState& s = layers.s;
+  const SelfCollisionSettings& settings = layers.settings;
+  SelfCollision once = layers.collision(), every = layers.collision();
+  Contacts first, refined, direct;
+  EXPECT_FALSE(once.covers(s)) << "no detection yet";
+  once.detect(s, settings, first);
   std::size_t changes = 0;
   std::vector<ParticleIndex> previous_list = first.triangle_point;
   for (int substep = 1; substep <= 4; ++substep) {
-    next_substep();
+    layers.next_substep();
     EXPECT_TRUE(once.covers(s)) << substep;
     once.refine(s, settings, refined);
     every.detect(s, settings, direct);
@@ -632,32 +644,24 @@ TEST(SelfCollision, RefiningADetectionOverFourSubstepsGivesEachSubstepsOwnContac
   }
   EXPECT_GE(changes, 2u) << "the contacts change as the layers approach";
   EXPECT_GT(once.candidate_count(), direct.triangle_point_count() + direct.edge_edge_count());
-  next_substep();
+  layers.next_substep();
   EXPECT_FALSE(once.covers(s)) << "past the horizon";
 }
 
 TEST(SelfCollision, TheFilterCreditsTheMotionTheHorizonHasLeft) {
-  // The folded cloth's top layer moving down at a constant 0.05 h per substep, horizon 4.
-  // A candidate's bound at substep τ is its least over the horizon plus the (T − τ) ρ of
-  // relative motion still to come: early in the horizon the approaching layers' pairs are
-  // ruled out unmeasured, later they are measured. Each substep still lists exactly a
+  // The approaching layers: a candidate's bound at substep τ is its least over the horizon
+  // plus the (T − τ) ρ of relative motion still to come, so early in the horizon their pairs
+  // are ruled out unmeasured, later they are measured. Each substep still lists exactly a
   // detection's contacts.
-  FoldedCloth cloth(24);
-  ParticleState& s = cloth.state;
-  for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i] + (s.previous_y[i] - s.y[i]) / 4;
-  SelfCollision once(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
-  SelfCollisionSettings settings{Real(0.4) * cloth.spacing(), Real(0.1) * cloth.spacing()};
-  settings.skin = Real(0.01) * cloth.spacing();
-  settings.horizon = 4;
+  ApproachingLayers layers;
+  ParticleState& s = layers.s;
+  const SelfCollisionSettings& settings = layers.settings;
+  SelfCollision once = layers.collision(), every = layers.collision();
   Contacts refined, direct;
   once.detect(s, settings, refined);
   std::vector<std::size_t> measured;
   for (int substep = 1; substep <= 4; ++substep) {
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      const Real step = s.y[i] - s.previous_y[i];
-      s.previous_y[i] = s.y[i];
-      s.y[i] += step;
-    }
+    layers.next_substep();
     ASSERT_TRUE(once.covers(s)) << substep;
     once.refine(s, settings, refined);
     every.detect(s, settings, direct);

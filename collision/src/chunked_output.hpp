@@ -16,8 +16,6 @@ namespace tessera::detail {
 /// Items per chunk: large enough to amortise a task, small enough to balance 2-64 threads on
 /// a 128² cloth.
 inline constexpr std::size_t kCollisionChunk = 512;
-/// The same for leaves of 8 primitives (primitive_leaves.hpp), each a query of 8.
-inline constexpr std::size_t kLeafChunk = kCollisionChunk / 16;
 
 template <class T>
 class ChunkedOutput {

@@ -9,7 +9,7 @@
 //     leaf 0: m m m m m m m m │ leaf 1: m m m m m m m m │ … │ leaf L−1: m m m ∅ ∅ ∅ ∅ ∅
 //
 //   per leaf, its members' fields as blocks of kLeafSize lanes (field-major):
-//     [ f0: m0 … m7 │ f1: m0 … m7 │ … ]      copied to a batch as whole blocks
+//     [ f0: m0 … m15 │ f1: m0 … m15 │ … ]    one 64-byte line per field (16 floats, 8 doubles)
 //
 // Why: a build's grids met ~17 triangle boxes per vertex and ~15 edge boxes per edge, nearly
 // all of them its in-plane neighbours; scanning ~70 grid entries per primitive and
@@ -32,9 +32,14 @@
 #include <tessera/collision/spatial_hash.hpp>
 #include <tessera/core/real.hpp>
 
+#include "chunked_output.hpp"
 #include "segment_distances.hpp"
 
 namespace tessera::detail {
+
+/// Leaves per chunk of a chunked loop (chunked_output.hpp): kCollisionChunk / 2 primitives,
+/// each a query.
+inline constexpr std::size_t kLeafChunk = kCollisionChunk / 2 / kBlockLanes;
 
 class PrimitiveLeaves {
  public:

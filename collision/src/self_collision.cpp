@@ -4,7 +4,7 @@
 //   reach_boxes        each particle's motion and budget (what it may move until the next
 //                      detection); the boxes of vertices, triangles and edges at the start,
 //                      grown by their budgets and by r (vertices), r/2 (edges)
-//   leaves             vertices, triangles and edges in leaves of 8 (primitive_leaves.hpp),
+//   leaves             vertices, triangles and edges in leaves of kBlockLanes (primitive_leaves.hpp),
 //                      the triangle and edge leaves' boxes in a uniform grid each
 //   vertex–triangle    each vertex leaf queries the triangle leaves' grid once; each vertex
 //                      against the met leaves' members, a vector at a time: box, topology,

@@ -94,8 +94,8 @@
 // the work is in the candidates' boxes, not in the contacts. Each of the 48,641 edges' boxes
 // (h long, grown by r/2 + budget + speed, swept along the paths) overlaps ~15 others, ~10 of
 // them sharing no vertex (a segment distance each), and each of the 16,384 vertices meets ~17
-// triangle boxes. A build therefore works by leaves of 8 primitives: one grid query per leaf
-// (~11 edge leaves, ~13 triangle leaves met), each member tested against the met leaves'
+// triangle boxes. A build therefore works by leaves of 16 primitives (8 in double): one grid query per
+// leaf (with leaves of 8, ~11 edge leaves and ~13 triangle leaves met), each member tested against the met leaves'
 // members in vectors read in place, box overlap and topology as masks before the distance.
 // Hence also reuse: the stage calls update(), which filters the candidates while every
 // particle keeps to its room, re-boxes only the primitives of the particles that left it

@@ -206,11 +206,13 @@ struct EdgeBatch {
   std::vector<Real> px, py, pz, qx, qy, qz, budget, allowed, squared;
 
   std::size_t count() const { return edges.size(); }
-  /// Sizes the arrays to the edges met (padded to the lanes) and fills them from `anchors`:
-  /// allowed[k] the pair's relative motion over `steps` substeps, budget[k] that plus the
-  /// edge's budget.
+  /// Sizes the arrays to the edges met (padded to the lanes) and fills them: the ends'
+  /// references from `references` (the ends by `ends`, two per edge), allowed[k] the pair's
+  /// relative motion over `steps` substeps from `anchors`, budget[k] that plus the edge's
+  /// budget.
   template <class Anchors>
-  void gather(const Anchors* anchors, const VelocityBall& own, Real steps) {
+  void gather(const Anchors* anchors, const std::uint32_t* ends, const Vector3r* references,
+              const VelocityBall& own, Real steps) {
     const std::size_t n = count();
     const std::size_t padded = detail::padded_to_lanes(n);
     for (std::vector<Real>* v : {&px, &py, &pz, &qx, &qy, &qz, &budget, &allowed, &squared})
@@ -218,8 +220,10 @@ struct EdgeBatch {
     if (within.size() < padded) within.resize(padded);
     for (std::size_t k = 0; k < n; ++k) {
       const Anchors& edge = anchors[edges[k]];
-      px[k] = edge.p[0], py[k] = edge.p[1], pz[k] = edge.p[2];
-      qx[k] = edge.q[0], qy[k] = edge.q[1], qz[k] = edge.q[2];
+      const Vector3r &p = references[ends[2 * std::size_t(edges[k])]],
+                     &q = references[ends[2 * std::size_t(edges[k]) + 1]];
+      px[k] = p[0], py[k] = p[1], pz[k] = p[2];
+      qx[k] = q[0], qy[k] = q[1], qz[k] = q[2];
       allowed[k] = allowed_between(own, edge, steps);
       budget[k] = edge.budget + allowed[k];
     }
@@ -245,7 +249,8 @@ struct TriangleBatch {
 
   std::size_t count() const { return triangles.size(); }
   template <class Anchors>
-  void gather(const Anchors* anchors, const VelocityBall& own, Real steps) {
+  void gather(const Anchors* anchors, const std::uint32_t* corners, const Vector3r* references,
+              const VelocityBall& own, Real steps) {
     const std::size_t n = count();
     const std::size_t padded = detail::padded_to_lanes(n);
     if (budget.size() < padded) {
@@ -254,7 +259,8 @@ struct TriangleBatch {
     }
     for (std::size_t k = 0; k < n; ++k) {
       const Anchors& triangle = anchors[triangles[k]];
-      for (int j = 0; j < 9; ++j) coordinates[j][k] = triangle.corner[j / 3][j % 3];
+      for (int j = 0; j < 9; ++j)
+        coordinates[j][k] = references[corners[3 * std::size_t(triangles[k]) + j / 3]][j % 3];
       allowed[k] = allowed_between(own, triangle, steps);
       budget[k] = triangle.budget + allowed[k];
     }
@@ -517,12 +523,13 @@ void SelfCollision::refresh_references(const SelfCollisionSettings& settings) {
   const Real tau = Real(substep_);
   parallel_over(particle_count_,
                 [&](std::size_t i) { reference_[i] = anchor_[i] + tau * velocity_[i]; });
-  // Budgets and velocity balls change with a re-anchoring only (the new primitives').
-  parallel_over(triangles_.size() / 3, [&](std::size_t t) {
-    set_triangle_anchors(std::uint32_t(t), new_triangle_[t] != 0);
-  });
-  parallel_over(settings.edge_edge ? edges_.size() / 2 : 0,
-                [&](std::size_t e) { set_edge_anchors(std::uint32_t(e), new_edge_[e] != 0); });
+  // Budgets and velocity balls change with a re-anchoring only (the new primitives'); the
+  // records hold no reference (the queries read them from reference_), so no other record
+  // changes.
+  parallel_over(new_triangles_.size(),
+                [&](std::size_t k) { set_triangle_anchors(new_triangles_[k]); });
+  parallel_over(settings.edge_edge ? new_edges_.size() : 0,
+                [&](std::size_t k) { set_edge_anchors(new_edges_[k]); });
 }
 
 template <std::size_t N>
@@ -553,13 +560,10 @@ void SelfCollision::add_edge_edge_candidate(std::uint32_t e, std::uint32_t f, Re
     out.push_back(candidate_of(std::min(e, f), std::max(e, f), squared, allowed, substeps_allowed()));
 }
 
-void SelfCollision::set_triangle_anchors(std::uint32_t t, bool with_ball) {
+void SelfCollision::set_triangle_anchors(std::uint32_t t) {
   TriangleAnchors& record = triangle_anchors_[t];
   const std::uint32_t ids[3] = {triangles_[3 * std::size_t(t)], triangles_[3 * std::size_t(t) + 1],
                                 triangles_[3 * std::size_t(t) + 2]};
-  for (int j = 0; j < 3; ++j)
-    for (int axis = 0; axis < 3; ++axis) record.corner[j][axis] = reference_[ids[j]][axis];
-  if (!with_ball) return;
   record.budget = std::max({budget_[ids[0]], budget_[ids[1]], budget_[ids[2]]});
   velocity_ball(ids, record.centre, record.radius);
 }
@@ -577,7 +581,8 @@ void SelfCollision::add_triangle_point_candidates(std::uint32_t p, Real reach,
   // The candidate rule: the distance test first (a vector at a time), then the topology of
   // those within it (not a corner of the triangle, not all four static).
   const Vector3r& v = velocity_[p];
-  batch.gather(triangle_anchors_.data(), VelocityBall{{v.x(), v.y(), v.z()}, 0}, substeps_allowed());
+  batch.gather(triangle_anchors_.data(), triangles_.data(), reference_.data(),
+               VelocityBall{{v.x(), v.y(), v.z()}, 0}, substeps_allowed());
   for (const std::uint32_t k : batch.measure(reference_[p], reach + budget_[p])) {
     const std::uint32_t t = batch.triangles[k];
     const std::uint32_t a = triangles_[3 * t], b = triangles_[3 * t + 1], c = triangles_[3 * t + 2];
@@ -586,16 +591,12 @@ void SelfCollision::add_triangle_point_candidates(std::uint32_t p, Real reach,
   }
 }
 
-void SelfCollision::set_edge_anchors(std::uint32_t e, bool with_ball) {
+void SelfCollision::set_edge_anchors(std::uint32_t e) {
   const std::uint32_t p = edges_[2 * e], q = edges_[2 * e + 1];
   EdgeAnchors& record = edge_anchors_[e];
-  for (int axis = 0; axis < 3; ++axis)
-    record.p[axis] = reference_[p][axis], record.q[axis] = reference_[q][axis];
-  if (!with_ball) return;
   record.budget = std::max(budget_[p], budget_[q]);
   const std::uint32_t ids[2] = {p, q};
   velocity_ball(ids, record.centre, record.radius);
-  record.unused = 0;
 }
 
 template <class Collect>
@@ -619,7 +620,8 @@ void SelfCollision::add_edge_edge_candidates(std::uint32_t e, Real reach,
   // The distance test first (a vector at a time, no branch per edge met), then the topology
   // of the few within it: the same candidates as add_edge_edge_candidate, in the same order.
   const EdgeAnchors& record = edge_anchors_[e];
-  batch.gather(edge_anchors_.data(), ball_of(record), substeps_allowed());
+  batch.gather(edge_anchors_.data(), edges_.data(), reference_.data(), ball_of(record),
+               substeps_allowed());
   for (const std::uint32_t k :
        batch.measure(reference_[p0], reference_[p1], reach + edge_slack_ + record.budget)) {
     const std::uint32_t f = batch.edges[k];
@@ -771,7 +773,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
       const std::uint32_t t = members[padding ? 0 : k];
       const TriangleAnchors& record = triangle_anchors_[t];
       for (std::size_t j = 0; j < 9; ++j)
-        leaves.triangle_fields.block(leaf, j)[k] = record.corner[j / 3][j % 3];
+        leaves.triangle_fields.block(leaf, j)[k] = reference_[triangles_[3 * std::size_t(t) + j / 3]][j % 3];
       fill_tail(leaves.triangle_fields, leaf, k, 9, record, padding ? kEmptyBox : triangle_boxes_[t],
                 triangles_.data() + 3 * std::size_t(t), 3);
     }
@@ -786,8 +788,8 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
         const std::uint32_t e = members[padding ? 0 : k];
         const EdgeAnchors& record = edge_anchors_[e];
         for (std::size_t j = 0; j < 3; ++j)
-          leaves.edge_fields.block(leaf, j)[k] = record.p[j],
-          leaves.edge_fields.block(leaf, 3 + j)[k] = record.q[j];
+          leaves.edge_fields.block(leaf, j)[k] = reference_[edges_[2 * std::size_t(e)]][j],
+          leaves.edge_fields.block(leaf, 3 + j)[k] = reference_[edges_[2 * std::size_t(e) + 1]][j];
         fill_tail(leaves.edge_fields, leaf, k, 6, record, padding ? kEmptyBox : edge_boxes_[e],
                   edges_.data() + 2 * std::size_t(e), 2);
       }

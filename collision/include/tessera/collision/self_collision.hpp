@@ -309,7 +309,8 @@ class SelfCollision {
   /// The longest horizon a build takes, whatever the setting: a larger one would only sweep
   /// the fast particles' boxes across the scene.
   static constexpr std::size_t kLongestHorizon = 1024;
-  /// Every particle's reference at this substep (A + τ V), and every record from them.
+  /// Every particle's reference at this substep (A + τ V), and the records of the new
+  /// primitives (new_triangles_, new_edges_), whose particles were re-anchored.
   void refresh_references(const SelfCollisionSettings& settings);
   /// The ball of particles `ids`' velocities: their mean and the largest distance from it.
   template <std::size_t N>
@@ -331,9 +332,8 @@ class SelfCollision {
   void add_edge_edge_candidates(std::uint32_t e, Real reach,
                                 const SelfCollisionPositions& positions,
                                 std::vector<Candidate>& out, Collect&& collect) const;
-  /// Edge e's record in edge_anchors_, from its particles' references and, with `with_ball`,
-  /// budgets and velocities.
-  void set_edge_anchors(std::uint32_t e, bool with_ball = true);
+  /// Edge e's record in edge_anchors_, from its particles' budgets and velocities.
+  void set_edge_anchors(std::uint32_t e);
   /// The same rule for vertex p and every triangle t that collect(visit) visits, their
   /// distances a vector at a time (triangle_distances.cpp), in the order visited. Reads
   /// triangle_anchors_.
@@ -341,9 +341,9 @@ class SelfCollision {
   void add_triangle_point_candidates(std::uint32_t p, Real reach,
                                      const SelfCollisionPositions& positions,
                                      std::vector<Candidate>& out, Collect&& collect) const;
-  /// Triangle t's record in triangle_anchors_: its corners' references, and with `with_ball`
-  /// its budget and velocity ball (which change with a re-anchoring only).
-  void set_triangle_anchors(std::uint32_t t, bool with_ball = true);
+  /// Triangle t's record in triangle_anchors_: its budget and velocity ball (which change
+  /// with a re-anchoring only).
+  void set_triangle_anchors(std::uint32_t t);
   /// Every particle's departure from its room under `frame`, into departure_, and the
   /// rounding allowance of the filter's bound; with `outran_list`, also the particles that
   /// left their room (ascending), from the same squared lengths.
@@ -411,18 +411,17 @@ class SelfCollision {
   static constexpr Real kAllowancePerCoordinate = Real(1e-5);
   std::size_t measured_candidates_ = 0;
   std::vector<Aabb> vertex_boxes_, triangle_boxes_, edge_boxes_;
-  /// Each edge's references and larger budget, and the ball of its corners' velocities
-  /// (centre, radius), as the build's edge–edge queries read them (one record, 48 bytes in
-  /// float, per edge met).
+  /// Each edge's larger budget and the ball of its corners' velocities (centre, radius),
+  /// fixed from its particles' anchoring to the next (the references, which move every
+  /// substep, are read from reference_): one record, 32 bytes in float, per edge met.
   struct alignas(4 * sizeof(Real)) EdgeAnchors {
-    Real p[3], q[3], budget, radius, centre[3], unused;
+    Real budget, radius, centre[3];
   };
   std::vector<EdgeAnchors> edge_anchors_;
   bool built_with_edge_edge_ = false;  // the last build's SelfCollisionSettings::edge_edge
-  /// Each triangle's references (a, b, c), largest budget and the ball of its corners'
-  /// velocities, as the vertex queries read them.
+  /// Each triangle's largest budget and the ball of its corners' velocities, as EdgeAnchors.
   struct alignas(4 * sizeof(Real)) TriangleAnchors {
-    Real corner[3][3], budget, radius, centre[3], unused[2];
+    Real budget, radius, centre[3];
   };
   std::vector<TriangleAnchors> triangle_anchors_;
   std::vector<Pair> triangle_point_pairs_, edge_edge_pairs_;

@@ -131,4 +131,13 @@ struct LeafQuery {
   }
 };
 
+/// Of the members of leaves[0 .. leaf_count) (their fields at leaf_data + (leaf · fields +
+/// field) · kBlockLanes, the box's lows from `lo_field`), those whose box overlaps `box`, as
+/// positions b · kBlockLanes + lane into `meeting`, in order; returns their count. `meeting`
+/// has room for leaf_count · kBlockLanes + kSegmentBatchLanes. SIMD, dispatched at run time
+/// (leaf_scan.cpp).
+std::size_t lanes_meeting_box(const Aabb& box, const Real* leaf_data, std::size_t fields,
+                              std::size_t lo_field, const std::uint32_t* leaves,
+                              std::size_t leaf_count, std::uint32_t* meeting);
+
 }  // namespace tessera::detail

@@ -280,38 +280,33 @@ struct TriangleBatch {
   }
 };
 
+/// The calling thread's leaf query (kept between calls).
+detail::LeafQuery& leaf_query() {
+  thread_local detail::LeafQuery query;
+  return query;
+}
+
 /// Calls visit(m) for each member m of `leaves` whose box at the last build (its lanes in
-/// `fields`, after `coordinates` fields) overlaps `box`: the leaf grid, then each lane's box.
+/// `fields`, after `coordinates` fields) overlaps `box`: the leaf grid, then the met leaves'
+/// lanes a vector at a time (leaf_scan.cpp), in the grid's order and lane order.
 template <std::size_t Fields, class Visit>
 void for_each_built_box_meeting(const detail::PrimitiveLeaves& leaves,
                                 const detail::LeafFields<Fields>& fields, std::size_t coordinates,
                                 const Aabb& box, Visit&& visit) {
   constexpr std::size_t kLanes = detail::PrimitiveLeaves::kLeafSize;
-  static_assert(kLanes <= 32);
-  leaves.grid().for_each_overlap(box, [&](std::uint32_t leaf) {
-    const std::uint32_t* members = leaves.members(leaf);
-    const Real* lo[3], *hi[3];
-    for (std::size_t axis = 0; axis < 3; ++axis)
-      lo[axis] = fields.block(leaf, coordinates + detail::kLeafLo + axis),
-      hi[axis] = fields.block(leaf, coordinates + detail::kLeafHi + axis);
-    // The lanes that meet, as bits, without a branch per lane (the compiler vectorises it;
-    // a padding lane's box is empty): most met lanes meet nothing.
-    std::uint32_t meeting = 0;
-    for (std::size_t k = 0; k < kLanes; ++k)
-      meeting |= std::uint32_t((lo[0][k] <= box.hi[0]) & (box.lo[0] <= hi[0][k]) &
-                               (lo[1][k] <= box.hi[1]) & (box.lo[1] <= hi[1][k]) &
-                               (lo[2][k] <= box.hi[2]) & (box.lo[2] <= hi[2][k]))
-                 << k;
-    for (; meeting != 0; meeting &= meeting - 1) {
-      const std::uint32_t member = members[__builtin_ctz(meeting)];
-      if (member != detail::PrimitiveLeaves::kNone) visit(member);
-    }
-  });
-}
-
-detail::LeafQuery& leaf_query() {
-  thread_local detail::LeafQuery query;
-  return query;
+  detail::LeafQuery& query = leaf_query();
+  query.clear();
+  leaves.grid().for_each_overlap(box, [&](std::uint32_t leaf) { query.leaves.push_back(leaf); });
+  if (query.leaves.empty()) return;
+  query.fit();
+  const std::size_t found =
+      detail::lanes_meeting_box(box, fields.data(), Fields, coordinates + detail::kLeafLo,
+                                query.leaves.data(), query.leaves.size(), query.within.data());
+  for (std::size_t w = 0; w < found; ++w) {
+    const std::uint32_t k = query.within[w];
+    const std::uint32_t member = leaves.members(query.leaves[k / kLanes])[k % kLanes];
+    if (member != detail::PrimitiveLeaves::kNone) visit(member);
+  }
 }
 
 TriangleBatch& triangle_batch() {

@@ -21,6 +21,7 @@
 #include <tessera/io/generators.hpp>
 
 #include "closest_distance.hpp"
+#include "primitive_leaves.hpp"
 #include "segment_distances.hpp"
 #include "triangle_distances.hpp"
 
@@ -556,6 +557,63 @@ TEST(SelfCollision, LeafKernelsPassExactlyTheScalarRulesPairsOnEveryTarget) {
     EXPECT_GT(passed, compared / 10);
     EXPECT_LT(passed, compared);
   }
+}
+
+TEST(SelfCollision, TheLeafScanFindsExactlyTheMembersWhoseBoxMeetsOnEveryTarget) {
+  // A re-box queries the build's leaves by box (lanes_meeting_box, leaf_scan.cpp): of the
+  // met leaves' members, those whose box overlaps the query's, as positions
+  // b · kBlockLanes + lane in order, on every target. Boxes touching the query's at a face
+  // meet (≤ both ways); an empty box (a padding lane's) meets nothing.
+  std::mt19937 random(11);
+  std::uniform_real_distribution<Real> coordinate(-1, 1), unit(0, 1);
+  constexpr std::size_t kLeaves = 7, kLanes = detail::kBlockLanes, kCoordinates = 6;
+  constexpr std::size_t kFields = kCoordinates + detail::kLeafTailFields;
+  std::vector<Real> data(kLeaves * kFields * kLanes, Real(0));
+  const auto at = [&](std::size_t leaf, std::size_t field, std::size_t lane) -> Real& {
+    return data[(leaf * kFields + kCoordinates + field) * kLanes + lane];
+  };
+  std::size_t compared = 0, met_total = 0;
+  for (int round = 0; round < 40; ++round) {
+    Aabb query;
+    for (int axis = 0; axis < 3; ++axis)
+      query.lo[axis] = coordinate(random) - Real(0.3), query.hi[axis] = query.lo[axis] + Real(0.8);
+    for (std::size_t leaf = 0; leaf < kLeaves; ++leaf)
+      for (std::size_t lane = 0; lane < kLanes; ++lane)
+        for (std::size_t axis = 0; axis < 3; ++axis) {
+          Real lo = coordinate(random), hi = lo + Real(0.5) * unit(random);
+          if (random() % 16 == 0) hi = query.lo[axis];  // touching at a face: meets
+          if (random() % 16 == 0) lo = query.hi[axis], hi = lo + Real(0.1);
+          if (leaf == 3 && lane % 5 == 0)  // empty, as a padding lane's
+            lo = std::numeric_limits<Real>::max(), hi = std::numeric_limits<Real>::lowest();
+          at(leaf, detail::kLeafLo + axis, lane) = lo;
+          at(leaf, detail::kLeafHi + axis, lane) = hi;
+        }
+    const std::vector<std::uint32_t> met = {5, 0, 3, 6, 2};
+    std::vector<std::uint32_t> expected;
+    for (std::size_t b = 0; b < met.size(); ++b)
+      for (std::size_t lane = 0; lane < kLanes; ++lane) {
+        bool meets = true;
+        for (std::size_t axis = 0; axis < 3; ++axis)
+          meets = meets && at(met[b], detail::kLeafLo + axis, lane) <= query.hi[axis] &&
+                  query.lo[axis] <= at(met[b], detail::kLeafHi + axis, lane);
+        if (meets) expected.push_back(std::uint32_t(b * kLanes + lane));
+        ++compared;
+      }
+    met_total += expected.size();
+    for (const std::string& target : available_simd_targets()) {
+      force_simd_target(target);
+      std::vector<std::uint32_t> meeting(met.size() * kLanes + detail::kSegmentBatchLanes);
+      const std::size_t found =
+          detail::lanes_meeting_box(query, data.data(), kFields, kCoordinates + detail::kLeafLo,
+                                    met.data(), met.size(), meeting.data());
+      EXPECT_EQ(std::vector<std::uint32_t>(meeting.begin(), meeting.begin() + std::ptrdiff_t(found)),
+                expected)
+          << target;
+    }
+  }
+  force_simd_target("");
+  EXPECT_GT(met_total, compared / 20);
+  EXPECT_LT(met_total, compared / 2);
 }
 
 TEST(SelfCollision, AFoldedClothHasExactlyTheBruteForceContacts) {

@@ -13,8 +13,9 @@
 
 #include <hwy/highway.h>
 
+#include "leaf_scan.hpp"
 #include "passing_lanes-inl.h"
-#include "primitive_leaves.hpp"
+#include "segment_distances.hpp"
 
 HWY_BEFORE_NAMESPACE();
 namespace tessera {

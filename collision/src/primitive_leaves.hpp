@@ -6,7 +6,7 @@
 //   members by Morton order of their points at the first build (leaves stay compact: a
 //   mesh's neighbours stay neighbours as it bends)
 //
-//     leaf 0: m m m m m m m m │ leaf 1: m m m m m m m m │ … │ leaf L−1: m m m ∅ ∅ ∅ ∅ ∅
+//     leaf 0: m0 … m15 │ leaf 1: m0 … m15 │ … │ leaf L−1: m m m ∅ … ∅     (kLeafSize each)
 //
 //   per leaf, its members' fields as blocks of kLeafSize lanes (field-major):
 //     [ f0: m0 … m15 │ f1: m0 … m15 │ … ]    one 64-byte line per field (16 floats, 8 doubles)
@@ -32,14 +32,9 @@
 #include <tessera/collision/spatial_hash.hpp>
 #include <tessera/core/real.hpp>
 
-#include "chunked_output.hpp"
 #include "segment_distances.hpp"
 
 namespace tessera::detail {
-
-/// Leaves per chunk of a chunked loop (chunked_output.hpp): kCollisionChunk / 2 primitives,
-/// each a query.
-inline constexpr std::size_t kLeafChunk = kCollisionChunk / 2 / kBlockLanes;
 
 class PrimitiveLeaves {
  public:
@@ -130,14 +125,5 @@ struct LeafQuery {
     if (within.size() < lanes) squared.resize(lanes), allowed.resize(lanes), within.resize(lanes);
   }
 };
-
-/// Of the members of leaves[0 .. leaf_count) (their fields at leaf_data + (leaf · fields +
-/// field) · kBlockLanes, the box's lows from `lo_field`), those whose box overlaps `box`, as
-/// positions b · kBlockLanes + lane into `meeting`, in order; returns their count. `meeting`
-/// has room for leaf_count · kBlockLanes + kSegmentBatchLanes. SIMD, dispatched at run time
-/// (leaf_scan.cpp).
-std::size_t lanes_meeting_box(const Aabb& box, const Real* leaf_data, std::size_t fields,
-                              std::size_t lo_field, const std::uint32_t* leaves,
-                              std::size_t leaf_count, std::uint32_t* meeting);
 
 }  // namespace tessera::detail

@@ -88,8 +88,8 @@ struct BlockQuery {
 };
 /// The lanes of a block (primitive_leaves.hpp: a leaf's members): a field's block is one
 /// 64-byte cache line and one vector of the widest target (AVX-512). Measured against 8 in
-/// float (docs/performance.md, "Leaves of a cache line"): a build 25–30 % faster on AVX-512,
-/// the same on AVX2 (two vectors a block).
+/// float (docs/performance.md, "Leaves of a cache line"): a build takes 25–32 % less time on
+/// AVX-512 and the same on AVX2 (two vectors a block).
 inline constexpr std::size_t kBlockLanes = 64 / sizeof(Real);
 /// A leaf's fields, each a block of kBlockLanes lanes (primitive_leaves.hpp): its members'
 /// coordinates (segments p, q; triangles a, b, c; x, y, z each), then these.

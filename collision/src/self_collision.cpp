@@ -32,6 +32,7 @@
 
 #include "chunked_output.hpp"
 #include "closest_distance.hpp"
+#include "leaf_scan.hpp"
 #include "primitive_leaves.hpp"
 #include "segment_distances.hpp"
 #include "triangle_distances.hpp"
@@ -65,6 +66,9 @@ constexpr Aabb kEmptyBox{{std::numeric_limits<Real>::max(), std::numeric_limits<
                           std::numeric_limits<Real>::max()},
                          {std::numeric_limits<Real>::lowest(), std::numeric_limits<Real>::lowest(),
                           std::numeric_limits<Real>::lowest()}};
+/// Leaves per chunk of a build's chunked loops (chunked_output.hpp): kCollisionChunk / 2
+/// primitives, each a query.
+constexpr std::size_t kLeafChunk = detail::kCollisionChunk / 2 / detail::kBlockLanes;
 }  // namespace
 
 struct SelfCollision::Leaves {
@@ -259,8 +263,8 @@ struct TriangleBatch {
     }
     for (std::size_t k = 0; k < n; ++k) {
       const Anchors& triangle = anchors[triangles[k]];
-      for (int j = 0; j < 9; ++j)
-        coordinates[j][k] = references[corners[3 * std::size_t(triangles[k]) + j / 3]][j % 3];
+      const std::uint32_t* ids = corners + 3 * std::size_t(triangles[k]);
+      for (int j = 0; j < 9; ++j) coordinates[j][k] = references[ids[j / 3]][j % 3];
       allowed[k] = allowed_between(own, triangle, steps);
       budget[k] = triangle.budget + allowed[k];
     }
@@ -288,7 +292,9 @@ detail::LeafQuery& leaf_query() {
 
 /// Calls visit(m) for each member m of `leaves` whose box at the last build (its lanes in
 /// `fields`, after `coordinates` fields) overlaps `box`: the leaf grid, then the met leaves'
-/// lanes a vector at a time (leaf_scan.cpp), in the grid's order and lane order.
+/// lanes a vector at a time (leaf_scan.cpp), in the grid's order and lane order. The
+/// thread's leaf_query() holds the answers while visit runs, so visit must not use it (no
+/// leaf query, no TBB call that could let the thread take another chunk).
 template <std::size_t Fields, class Visit>
 void for_each_built_box_meeting(const detail::PrimitiveLeaves& leaves,
                                 const detail::LeafFields<Fields>& fields, std::size_t coordinates,
@@ -759,7 +765,8 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
     field(detail::kLeafStatic) = all_static ? Real(1) : Real(0);
   };
   // The records are in index order and the leaves in Morton order: the next leaf's records
-  // are fetched while this one's are copied.
+  // are fetched while this one's are copied. (The references the fills read through the
+  // primitives' particles are not: 16 k particles' references stay in L2.)
   const auto prefetch_members = [&](const detail::PrimitiveLeaves& of, std::size_t leaf,
                                     const auto* records, const Aabb* boxes) {
     if (leaf >= of.leaf_count()) return;
@@ -831,7 +838,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
           }
         }
       },
-      candidate_triangle_point_, detail::kLeafChunk);
+      candidate_triangle_point_, kLeafChunk);
   sort_candidates(candidate_triangle_point_, particle_count_);
 
   // Edge–edge: each edge of a leaf against every edge of the leaves at or after its own that
@@ -895,7 +902,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
           }
         }
       },
-      candidate_edge_edge_, detail::kLeafChunk);
+      candidate_edge_edge_, kLeafChunk);
   sort_candidates(candidate_edge_edge_, edge_count);
   return bulk;
 }
@@ -1018,8 +1025,8 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   }
   departure_allowance_ = std::max(departure_allowance_, kAllowancePerCoordinate * largest);
   edge_slack_ = std::max(edge_slack_, kAllowancePerCoordinate * largest);
-  // Every reference and record at this substep: the new primitives are tested against the
-  // others where both are now, with the horizon left.
+  // Every reference at this substep, and the new primitives' records: the new primitives
+  // are tested against the others where both are now, with the horizon left.
   refresh_references(settings);
   for (const std::uint32_t t : new_triangles_)
     if (!reboxed_triangle_[t]) reboxed_triangle_[t] = 1, reboxed_triangles_.push_back(t);

@@ -21,7 +21,7 @@
 #include <tessera/io/generators.hpp>
 
 #include "closest_distance.hpp"
-#include "primitive_leaves.hpp"
+#include "leaf_scan.hpp"
 #include "segment_distances.hpp"
 #include "triangle_distances.hpp"
 
@@ -563,7 +563,8 @@ TEST(SelfCollision, TheLeafScanFindsExactlyTheMembersWhoseBoxMeetsOnEveryTarget)
   // A re-box queries the build's leaves by box (lanes_meeting_box, leaf_scan.cpp): of the
   // met leaves' members, those whose box overlaps the query's, as positions
   // b · kBlockLanes + lane in order, on every target. Boxes touching the query's at a face
-  // meet (≤ both ways); an empty box (a padding lane's) meets nothing.
+  // meet (≤ both ways); an empty box (a padding lane's) meets nothing. (The re-box path
+  // that calls it, padding members included, is covered by the contact and hash tests.)
   std::mt19937 random(11);
   std::uniform_real_distribution<Real> coordinate(-1, 1), unit(0, 1);
   constexpr std::size_t kLeaves = 7, kLanes = detail::kBlockLanes, kCoordinates = 6;

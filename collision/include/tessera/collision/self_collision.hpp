@@ -94,8 +94,8 @@
 // the work is in the candidates' boxes, not in the contacts. Each of the 48,641 edges' boxes
 // (h long, grown by r/2 + budget + speed, swept along the paths) overlaps ~15 others, ~10 of
 // them sharing no vertex (a segment distance each), and each of the 16,384 vertices meets ~17
-// triangle boxes. A build therefore works by leaves of 16 primitives (8 in double): one grid query per
-// leaf (with leaves of 8, ~11 edge leaves and ~13 triangle leaves met), each member tested against the met leaves'
+// triangle boxes. A build therefore works by leaves of 16 primitives (8 in double, a cache
+// line per field): one grid query per leaf, each member tested against the met leaves'
 // members in vectors read in place, box overlap and topology as masks before the distance.
 // Hence also reuse: the stage calls update(), which filters the candidates while every
 // particle keeps to its room, re-boxes only the primitives of the particles that left it
@@ -413,14 +413,15 @@ class SelfCollision {
   std::vector<Aabb> vertex_boxes_, triangle_boxes_, edge_boxes_;
   /// Each edge's larger budget and the ball of its corners' velocities (centre, radius),
   /// fixed from its particles' anchoring to the next (the references, which move every
-  /// substep, are read from reference_): one record, 32 bytes in float, per edge met.
-  struct alignas(4 * sizeof(Real)) EdgeAnchors {
+  /// substep, are read from reference_): one record, 32 bytes in float (64 in double), each
+  /// within one cache line, per edge met.
+  struct alignas(8 * sizeof(Real)) EdgeAnchors {
     Real budget, radius, centre[3];
   };
   std::vector<EdgeAnchors> edge_anchors_;
   bool built_with_edge_edge_ = false;  // the last build's SelfCollisionSettings::edge_edge
   /// Each triangle's largest budget and the ball of its corners' velocities, as EdgeAnchors.
-  struct alignas(4 * sizeof(Real)) TriangleAnchors {
+  struct alignas(8 * sizeof(Real)) TriangleAnchors {
     Real budget, radius, centre[3];
   };
   std::vector<TriangleAnchors> triangle_anchors_;

@@ -4,8 +4,9 @@
 //   reach_boxes        each particle's motion and budget (what it may move until the next
 //                      detection); the boxes of vertices, triangles and edges at the start,
 //                      grown by their budgets and by r (vertices), r/2 (edges)
-//   leaves             vertices, triangles and edges in leaves of kBlockLanes (primitive_leaves.hpp),
-//                      the triangle and edge leaves' boxes in a uniform grid each
+//   leaves             vertices, triangles and edges in leaves of kBlockLanes
+//                      (primitive_leaves.hpp), the triangle and edge leaves' boxes in a
+//                      uniform grid each
 //   vertex–triangle    each vertex leaf queries the triangle leaves' grid once; each vertex
 //                      against the met leaves' members, a vector at a time: box, topology,
 //                      statics and distance as lane masks
@@ -782,8 +783,9 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
       const bool padding = members[k] == detail::PrimitiveLeaves::kNone;
       const std::uint32_t t = members[padding ? 0 : k];
       const TriangleAnchors& record = triangle_anchors_[t];
+      const std::uint32_t* corners = triangles_.data() + 3 * std::size_t(t);
       for (std::size_t j = 0; j < 9; ++j)
-        leaves.triangle_fields.block(leaf, j)[k] = reference_[triangles_[3 * std::size_t(t) + j / 3]][j % 3];
+        leaves.triangle_fields.block(leaf, j)[k] = reference_[corners[j / 3]][j % 3];
       fill_tail(leaves.triangle_fields, leaf, k, 9, record, padding ? kEmptyBox : triangle_boxes_[t],
                 triangles_.data() + 3 * std::size_t(t), 3);
     }
@@ -797,9 +799,11 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
         const bool padding = members[k] == detail::PrimitiveLeaves::kNone;
         const std::uint32_t e = members[padding ? 0 : k];
         const EdgeAnchors& record = edge_anchors_[e];
+        const Vector3r &p = reference_[edges_[2 * std::size_t(e)]],
+                       &q = reference_[edges_[2 * std::size_t(e) + 1]];
         for (std::size_t j = 0; j < 3; ++j)
-          leaves.edge_fields.block(leaf, j)[k] = reference_[edges_[2 * std::size_t(e)]][j],
-          leaves.edge_fields.block(leaf, 3 + j)[k] = reference_[edges_[2 * std::size_t(e) + 1]][j];
+          leaves.edge_fields.block(leaf, j)[k] = p[j],
+          leaves.edge_fields.block(leaf, 3 + j)[k] = q[j];
         fill_tail(leaves.edge_fields, leaf, k, 6, record, padding ? kEmptyBox : edge_boxes_[e],
                   edges_.data() + 2 * std::size_t(e), 2);
       }

@@ -27,22 +27,15 @@ std::size_t LanesMeetingBox(const Aabb& box, const Real* leaf_data, std::size_t 
                             std::size_t leaf_count, std::uint32_t* meeting) {
   const hn::CappedTag<Real, detail::kBlockLanes> d;
   const std::size_t width = hn::Lanes(d);
-  const auto qlx = hn::Set(d, box.lo[0]), qly = hn::Set(d, box.lo[1]), qlz = hn::Set(d, box.lo[2]);
-  const auto qhx = hn::Set(d, box.hi[0]), qhy = hn::Set(d, box.hi[1]), qhz = hn::Set(d, box.hi[2]);
   constexpr std::size_t L = detail::kBlockLanes;
   std::size_t found = 0;
   for (std::size_t b = 0; b < leaf_count; ++b) {
     const Real* lo = leaf_data + (std::size_t(leaves[b]) * fields + lo_field) * L;
     const Real* hi = lo + (detail::kLeafHi - detail::kLeafLo) * L;
+    const detail::BoxBatch boxes{{lo, lo + L, lo + 2 * L}, {hi, hi + L, hi + 2 * L}};
     for (std::size_t i = 0; i < L; i += width) {
-      auto m = hn::Le(hn::LoadU(d, lo + i), qhx);
-      m = hn::And(m, hn::Le(qlx, hn::LoadU(d, hi + i)));
-      m = hn::And(m, hn::Le(hn::LoadU(d, lo + L + i), qhy));
-      m = hn::And(m, hn::Le(qly, hn::LoadU(d, hi + L + i)));
-      m = hn::And(m, hn::Le(hn::LoadU(d, lo + 2 * L + i), qhz));
-      m = hn::And(m, hn::Le(qlz, hn::LoadU(d, hi + 2 * L + i)));
       const std::size_t out = b * L + i;
-      found = AppendPassing(d, m, out, out + width, meeting, found);
+      found = AppendPassing(d, BoxesMeetAt(d, box, boxes, i), out, out + width, meeting, found);
     }
   }
   return found;

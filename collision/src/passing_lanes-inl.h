@@ -53,19 +53,28 @@ HWY_INLINE hwy::HWY_NAMESPACE::Vec<D> AllowanceAt(D d, const detail::BlockQuery&
                  hn::Add(hn::Add(hn::Set(d, query.radius), hn::LoadU(d, balls.radius + i)), apart));
 }
 
+/// The lanes i .. i + lanes whose box overlaps `box` (faces touching meet; an empty box
+/// meets nothing).
+template <class D>
+HWY_INLINE hwy::HWY_NAMESPACE::Mask<D> BoxesMeetAt(D d, const Aabb& box,
+                                                   const detail::BoxBatch& boxes, std::size_t i) {
+  namespace hn = hwy::HWY_NAMESPACE;
+  auto m = hn::Le(hn::LoadU(d, boxes.lo[0] + i), hn::Set(d, box.hi[0]));
+  m = hn::And(m, hn::Le(hn::Set(d, box.lo[0]), hn::LoadU(d, boxes.hi[0] + i)));
+  for (int axis = 1; axis < 3; ++axis) {
+    m = hn::And(m, hn::Le(hn::LoadU(d, boxes.lo[axis] + i), hn::Set(d, box.hi[axis])));
+    m = hn::And(m, hn::Le(hn::Set(d, box.lo[axis]), hn::LoadU(d, boxes.hi[axis] + i)));
+  }
+  return m;
+}
+
 /// The lanes i .. i + lanes that may pair with the query: their box overlaps the query's,
 /// they share no particle with it, and they are not all static with it.
 template <class D>
 HWY_INLINE hwy::HWY_NAMESPACE::Mask<D> MayPairAt(D d, const detail::BlockQuery& query,
                                                  const detail::BlockBatch& lanes, std::size_t i) {
   namespace hn = hwy::HWY_NAMESPACE;
-  const detail::BoxBatch& boxes = lanes.boxes;
-  auto m = hn::Le(hn::LoadU(d, boxes.lo[0] + i), hn::Set(d, query.box.hi[0]));
-  m = hn::And(m, hn::Le(hn::Set(d, query.box.lo[0]), hn::LoadU(d, boxes.hi[0] + i)));
-  for (int axis = 1; axis < 3; ++axis) {
-    m = hn::And(m, hn::Le(hn::LoadU(d, boxes.lo[axis] + i), hn::Set(d, query.box.hi[axis])));
-    m = hn::And(m, hn::Le(hn::Set(d, query.box.lo[axis]), hn::LoadU(d, boxes.hi[axis] + i)));
-  }
+  auto m = BoxesMeetAt(d, query.box, lanes.boxes, i);
   if (hn::AllFalse(d, m)) return m;
   const hn::RebindToUnsigned<D> du;
   const auto first = hn::BitCast(du, hn::Set(d, query.id[0])),

@@ -28,6 +28,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <tessera/core/error.hpp>
 
@@ -1052,12 +1053,6 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   // their boxes now are in the second grids.
   new_vertex_.assign(particle_count_, 0);
   for (const std::uint32_t i : outran_) new_vertex_[i] = 1;
-  std::erase_if(candidate_triangle_point_, [&](const Candidate& pair) {
-    return new_vertex_[pair.first] || new_triangle_[pair.second];
-  });
-  std::erase_if(candidate_edge_edge_, [&](const Candidate& pair) {
-    return new_edge_[pair.first] || new_edge_[pair.second];
-  });
   chunks_->triangle_point_candidates.run(
       outran_.size(),
       [&](std::size_t k, std::vector<Candidate>& buffer) {
@@ -1104,7 +1099,8 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
         found_others_);
     merge_sorted(found_triangle_point_, found_others_);
   }
-  merge_sorted(candidate_triangle_point_, found_triangle_point_);
+  merge_sorted(candidate_triangle_point_, found_triangle_point_, new_vertex_.data(),
+               new_triangle_.data());
 
   if (settings.edge_edge) {
     chunks_->edge_edge_candidates.run(
@@ -1125,12 +1121,15 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
           });
         },
         found_edge_edge_);
-    std::sort(found_edge_edge_.begin(), found_edge_edge_.end(),
-              [](const Candidate& l, const Candidate& r) {
-                return l.first != r.first ? l.first < r.first : l.second < r.second;
-              });
-    merge_sorted(candidate_edge_edge_, found_edge_edge_);
+    // Pairs are unique (and equal pairs are equal bits), so any sort gives the same list.
+    tbb::parallel_sort(found_edge_edge_.begin(), found_edge_edge_.end(),
+                       [](const Candidate& l, const Candidate& r) {
+                         return l.first != r.first ? l.first < r.first : l.second < r.second;
+                       });
+  } else {
+    found_edge_edge_.clear();
   }
+  merge_sorted(candidate_edge_edge_, found_edge_edge_, new_edge_.data(), new_edge_.data());
   return true;
 }
 
@@ -1153,14 +1152,55 @@ void SelfCollision::sort_candidates(std::vector<Candidate>& candidates, std::siz
   }
 }
 
-void SelfCollision::merge_sorted(std::vector<Candidate>& into,
-                                 const std::vector<Candidate>& more) {
-  if (more.empty()) return;
-  merged_.resize(into.size() + more.size());
-  std::merge(into.begin(), into.end(), more.begin(), more.end(), merged_.begin(),
-             [](const Candidate& l, const Candidate& r) {
-               return l.first != r.first ? l.first < r.first : l.second < r.second;
-             });
+void SelfCollision::merge_sorted(std::vector<Candidate>& into, const std::vector<Candidate>& more,
+                                 const std::uint8_t* drop_first, const std::uint8_t* drop_second) {
+  // In blocks of `into`, each with the run of `more` below the next block's first pair:
+  // the kept pairs counted, then each block merged at its place, both in parallel. The
+  // result is the one sorted list, whatever the blocks and threads.
+  //
+  //   into:  [ block 0 ·····|  block 1 ·····| block 2 ··· ]   (dropped pairs skipped)
+  //   more:  [ ·· run 0 ··|·· run 1 ········|· run 2 ·· ]     (split at each block's first)
+  //   out:   [ kept 0 + run 0 | kept 1 + run 1 | kept 2 + run 2 ]
+  constexpr std::size_t kBlock = 4096;
+  const auto less = [](const Candidate& l, const Candidate& r) {
+    return l.first != r.first ? l.first < r.first : l.second < r.second;
+  };
+  const auto dropped = [&](const Candidate& pair) {
+    return (drop_first && drop_first[pair.first]) || (drop_second && drop_second[pair.second]);
+  };
+  const std::size_t blocks = std::max<std::size_t>(1, (into.size() + kBlock - 1) / kBlock);
+  // Block b: into [b kBlock, …), more [run_begin(b), run_begin(b + 1)).
+  const auto run_begin = [&](std::size_t b) -> std::size_t {
+    if (b == 0) return 0;
+    if (b == blocks) return more.size();
+    return std::size_t(std::lower_bound(more.begin(), more.end(), into[b * kBlock], less) -
+                       more.begin());
+  };
+  merge_kept_.assign(blocks + 1, 0);
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+    const std::size_t end = std::min(into.size(), (b + 1) * kBlock);
+    std::size_t kept = 0;
+    for (std::size_t i = b * kBlock; i < end; ++i) kept += !dropped(into[i]);
+    merge_kept_[b + 1] = kept;
+  });
+  for (std::size_t b = 0; b < blocks; ++b) merge_kept_[b + 1] += merge_kept_[b];
+  merged_.resize(merge_kept_[blocks] + more.size());
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+    std::size_t i = b * kBlock, j = run_begin(b);
+    const std::size_t end = std::min(into.size(), (b + 1) * kBlock), run_end = run_begin(b + 1);
+    Candidate* out = merged_.data() + merge_kept_[b] + j;
+    while (i < end && j < run_end) {
+      if (dropped(into[i]))
+        ++i;
+      else if (less(more[j], into[i]))
+        *out++ = more[j++];
+      else
+        *out++ = into[i++];
+    }
+    for (; i < end; ++i)
+      if (!dropped(into[i])) *out++ = into[i];
+    std::copy(more.begin() + std::ptrdiff_t(j), more.begin() + std::ptrdiff_t(run_end), out);
+  });
   into.swap(merged_);
 }
 

@@ -363,7 +363,12 @@ class SelfCollision {
   /// The candidates that meet the contact rule at `positions`, into the pair lists.
   void filter_candidates(const SelfCollisionPositions& positions,
                          const SelfCollisionSettings& settings, Real reach);
-  void merge_sorted(std::vector<Candidate>& into, const std::vector<Candidate>& more);
+  /// `into` without the pairs whose first is flagged in `drop_first` or whose second is in
+  /// `drop_second` (either may be null: nothing dropped by it), merged with `more`. Both
+  /// sorted by (first, second), and no kept pair of `into` is in `more`.
+  void merge_sorted(std::vector<Candidate>& into, const std::vector<Candidate>& more,
+                    const std::uint8_t* drop_first = nullptr,
+                    const std::uint8_t* drop_second = nullptr);
   /// The pairs as the particle lists of `out`.
   void emit(Contacts& out) const;
 
@@ -395,6 +400,7 @@ class SelfCollision {
   std::vector<std::uint8_t> new_vertex_, new_triangle_, new_edge_;
   std::vector<std::uint32_t> new_triangles_, new_edges_, outran_;
   std::vector<Candidate> found_triangle_point_, found_others_, found_edge_edge_, merged_;
+  std::vector<std::size_t> merge_kept_;  // per block of merge_sorted's `into`
   std::vector<Departure> departure_;  // per particle, this substep's
   // Per vertex w + m, per triangle and per edge the largest w plus the largest m of its
   // corners: the filter's bound, this substep's.

@@ -1060,12 +1060,12 @@ TEST(SelfCollision, SwitchingEdgeEdgeContactsBetweenUpdatesBuildsAgain) {
   }
 }
 
-TEST(SelfCollision, UpdatesRebuildOnlyWhatOutranItsRoomAndMatchADetectionEachSubstep) {
-  // The folded cloth at rest but for a patch of its upper layer that dives onto the lower
-  // one, speeding up each substep: those particles outrun the room a build gave them, so
-  // update() re-boxes their primitives (the rest keep their candidates), and every substep
-  // lists exactly what a detection of its own lists.
-  FoldedCloth cloth(24);
+// The folded cloth of `size` at rest but for a patch of its upper layer that dives onto the
+// lower one, speeding up each substep: those particles outrun the room a build gave them, so
+// update() re-boxes their primitives (the rest keep their candidates), and every substep
+// lists exactly what a detection of its own lists. Returns the most candidates listed.
+std::size_t expect_updates_match_detections(std::size_t size) {
+  FoldedCloth cloth(size);
   ParticleState& s = cloth.state;
   const Real h = cloth.spacing();
   for (std::size_t i = 0; i < s.size(); ++i) s.previous_y[i] = s.y[i];
@@ -1073,17 +1073,18 @@ TEST(SelfCollision, UpdatesRebuildOnlyWhatOutranItsRoomAndMatchADetectionEachSub
   for (std::size_t i = 0; i < s.size(); ++i)
     if (s.y[i] > Real(0.5) * h && s.x[i] < Real(0.3) && s.z[i] > Real(0.4) && s.z[i] < Real(0.6))
       patch.push_back(i);
-  ASSERT_GT(patch.size(), 5u);
+  EXPECT_GT(patch.size(), 5u);
   SelfCollision updated(cloth.grid.triangle_indices, s.size()), every(cloth.grid.triangle_indices, s.size());
   SelfCollisionSettings settings{Real(0.4) * h, Real(0.1) * h};
   settings.motion_scale = 2;
   settings.skin = Real(0.05) * h;
   Contacts by_update, direct;
-  std::size_t reboxed = 0, built = 0;
+  std::size_t reboxed = 0, built = 0, candidates = 0;
   for (int substep = 0; substep < 6; ++substep) {
     const SelfCollision::Update done = updated.update(s, settings, by_update);
     reboxed += done == SelfCollision::Update::reboxed;
     built += done == SelfCollision::Update::built;
+    candidates = std::max(candidates, updated.candidate_count());
     every.detect(s, settings, direct);
     EXPECT_EQ(by_update.triangle_point, direct.triangle_point) << substep;
     EXPECT_EQ(by_update.triangle_point_triangle, direct.triangle_point_triangle) << substep;
@@ -1095,6 +1096,17 @@ TEST(SelfCollision, UpdatesRebuildOnlyWhatOutranItsRoomAndMatchADetectionEachSub
   EXPECT_EQ(built, 1u) << "the first update builds; the patch is re-boxed after";
   EXPECT_GE(reboxed, 2u);
   EXPECT_GT(direct.triangle_point_count() + direct.edge_edge_count(), 0u);
+  return candidates;
+}
+
+TEST(SelfCollision, UpdatesRebuildOnlyWhatOutranItsRoomAndMatchADetectionEachSubstep) {
+  expect_updates_match_detections(24);
+}
+
+TEST(SelfCollision, UpdatesMatchADetectionEachSubstepWhenTheirListsAreMergedInBlocks) {
+  // A re-box merges its found pairs into the candidate lists in blocks of at least 4096
+  // pairs, in parallel: on two threads, a cloth whose lists reach several blocks.
+  tbb::task_arena(2).execute([] { EXPECT_GT(expect_updates_match_detections(64), 2u * 4096); });
 }
 
 TEST(SelfCollision, TheFilterMeasuresOnlyWhatTheAnchorDistancesCannotRuleOut) {

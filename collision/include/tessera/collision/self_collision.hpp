@@ -400,7 +400,7 @@ class SelfCollision {
   std::vector<std::uint8_t> new_vertex_, new_triangle_, new_edge_;
   std::vector<std::uint32_t> new_triangles_, new_edges_, outran_;
   std::vector<Candidate> found_triangle_point_, found_others_, found_edge_edge_, merged_;
-  std::vector<std::size_t> merge_kept_;  // per block of merge_sorted's `into`
+  std::vector<std::size_t> merge_kept_, merge_run_;  // per block of merge_sorted's `into`
   std::vector<Departure> departure_;  // per particle, this substep's
   // Per vertex w + m, per triangle and per edge the largest w plus the largest m of its
   // corners: the filter's bound, this substep's.

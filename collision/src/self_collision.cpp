@@ -388,6 +388,11 @@ EdgeBatch& edge_batch() {
   return batch;
 }
 
+/// The candidate lists' order: by first, then by second.
+constexpr auto by_pair = [](const auto& l, const auto& r) {
+  return l.first != r.first ? l.first < r.first : l.second < r.second;
+};
+
 template <class Body>
 void parallel_over(std::size_t n, Body&& body) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 2048),
@@ -1048,9 +1053,9 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
   reboxed_triangle_grid_.build(reboxed_triangle_boxes_);
   reboxed_edge_grid_.build(reboxed_edge_boxes_);
 
-  // Drop the candidates of the new primitives and find theirs again: the new vertices
-  // against every triangle, the other vertices against the new triangles, the new edges
-  // against every edge. The build's leaves hold stale boxes of reboxed primitives, skipped;
+  // Drop the candidates of the new primitives (in the merges at the end) and find theirs
+  // again: the new vertices against every triangle, the other vertices against the new
+  // triangles, the new edges against every edge. The build's leaves hold stale boxes of reboxed primitives, skipped;
   // their boxes now are in the second grids.
   new_vertex_.assign(particle_count_, 0);
   for (const std::uint32_t i : outran_) new_vertex_[i] = 1;
@@ -1122,11 +1127,9 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
           });
         },
         found_edge_edge_);
-    // Pairs are unique (and equal pairs are equal bits), so any sort gives the same list.
-    tbb::parallel_sort(found_edge_edge_.begin(), found_edge_edge_.end(),
-                       [](const Candidate& l, const Candidate& r) {
-                         return l.first != r.first ? l.first < r.first : l.second < r.second;
-                       });
+    // The pairs are unique (each found from one new edge; a pair of two new edges from the
+    // lower), so their sorted order is one, whatever the sort and the threads.
+    tbb::parallel_sort(found_edge_edge_.begin(), found_edge_edge_.end(), by_pair);
   } else {
     found_edge_edge_.clear();
   }
@@ -1157,8 +1160,7 @@ void SelfCollision::merge_sorted(std::vector<Candidate>& into, const std::vector
                                  const std::uint8_t* drop_first, const std::uint8_t* drop_second) {
   // In blocks of `into`, each with the run of `more` that sorts among its pairs: each
   // block's kept pairs moved to its front, then each block merged at its place, both in
-  // parallel.
-  // The result is the one sorted list, whatever the blocks and threads.
+  // parallel. The result is the one sorted list, whatever the blocks and threads.
   //
   //   into:  [ block 0 ·····|  block 1 ·····| block 2 ··· ]   (dropped pairs removed)
   //   more:  [ ·· run 0 ··|·· run 1 ········|· run 2 ·· ]     (split at each block's first)
@@ -1166,23 +1168,27 @@ void SelfCollision::merge_sorted(std::vector<Candidate>& into, const std::vector
   //
   // (A single pass that skips and merges at once measured slower on one thread than these
   // two: std::merge's branches predict the long runs of kept pairs.)
+  //
+  // A block is at least 4096 pairs (64 KB in float), enough to be worth a task; 4 per
+  // thread share out blocks whose runs differ in length. One thread, or a short list, takes
+  // one block without TBB: remove_if, then std::merge.
   constexpr std::size_t kLeastBlock = 4096, kBlocksPerThread = 4;
-  const auto less = [](const Candidate& l, const Candidate& r) {
-    return l.first != r.first ? l.first < r.first : l.second < r.second;
-  };
+  if (more.empty() && !drop_first && !drop_second) return;
   const std::size_t n = into.size();
-  const std::size_t blocks = std::clamp<std::size_t>(
-      n / kLeastBlock, 1, kBlocksPerThread * std::size_t(tbb::this_task_arena::max_concurrency()));
+  const std::size_t threads = std::size_t(tbb::this_task_arena::max_concurrency());
+  const std::size_t blocks =
+      threads == 1 ? 1 : std::clamp<std::size_t>(n / kLeastBlock, 1, kBlocksPerThread * threads);
   const auto block_begin = [&](std::size_t b) { return n * b / blocks; };
-  // Block b's run of `more` starts at merge_run_[b]: below its first pair, found before the
-  // block moves its kept pairs.
+  // merge_run_[b]: how many pairs of `more` sort below block b's first pair, read before
+  // remove_if moves the block's pairs; merge_kept_[b]: the kept pairs of the blocks before b.
   merge_kept_.assign(blocks + 1, 0);
   merge_run_.assign(blocks + 1, more.size());
   merge_run_[0] = 0;
   const auto keep = [&](std::size_t b) {
     if (b > 0)
       merge_run_[b] = std::size_t(
-          std::lower_bound(more.begin(), more.end(), into[block_begin(b)], less) - more.begin());
+          std::lower_bound(more.begin(), more.end(), into[block_begin(b)], by_pair) -
+          more.begin());
     const auto first = into.begin() + std::ptrdiff_t(block_begin(b)),
                last = into.begin() + std::ptrdiff_t(block_begin(b + 1));
     merge_kept_[b + 1] = std::size_t(
@@ -1205,7 +1211,7 @@ void SelfCollision::merge_sorted(std::vector<Candidate>& into, const std::vector
     const std::size_t run = merge_run_[b];
     std::merge(first, first + std::ptrdiff_t(merge_kept_[b + 1] - merge_kept_[b]),
                more.begin() + std::ptrdiff_t(run), more.begin() + std::ptrdiff_t(merge_run_[b + 1]),
-               merged_.begin() + std::ptrdiff_t(merge_kept_[b] + run), less);
+               merged_.begin() + std::ptrdiff_t(merge_kept_[b] + run), by_pair);
   };
   if (blocks == 1)
     merge(0);

@@ -242,8 +242,10 @@ class SelfCollision {
   /// The last detection's candidate pairs (vertex–triangle and edge–edge), which refine()
   /// filters.
   std::size_t candidate_count() const {
-    return candidate_triangle_point_.size() + candidate_edge_edge_.size();
+    return triangle_point_candidate_count() + edge_edge_candidate_count();
   }
+  std::size_t triangle_point_candidate_count() const { return candidate_triangle_point_.size(); }
+  std::size_t edge_edge_candidate_count() const { return candidate_edge_edge_.size(); }
   /// How many candidates the last filtering measured (the rest were ruled out by their
   /// distance at the anchors; see "Filtering" above).
   std::size_t measured_candidate_count() const { return measured_candidates_; }
@@ -400,7 +402,9 @@ class SelfCollision {
   std::vector<std::uint8_t> new_vertex_, new_triangle_, new_edge_;
   std::vector<std::uint32_t> new_triangles_, new_edges_, outran_;
   std::vector<Candidate> found_triangle_point_, found_others_, found_edge_edge_, merged_;
-  std::vector<std::size_t> merge_kept_, merge_run_;  // per block of merge_sorted's `into`
+  // merge_sorted's block boundaries (blocks + 1 each): the kept pairs before each block,
+  // and where each block's run of new pairs starts.
+  std::vector<std::size_t> merge_kept_, merge_run_;
   std::vector<Departure> departure_;  // per particle, this substep's
   // Per vertex w + m, per triangle and per edge the largest w plus the largest m of its
   // corners: the filter's bound, this substep's.

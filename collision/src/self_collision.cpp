@@ -1055,8 +1055,8 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
 
   // Drop the candidates of the new primitives (in the merges at the end) and find theirs
   // again: the new vertices against every triangle, the other vertices against the new
-  // triangles, the new edges against every edge. The build's leaves hold stale boxes of reboxed primitives, skipped;
-  // their boxes now are in the second grids.
+  // triangles, the new edges against every edge. The build's leaves hold stale boxes of
+  // reboxed primitives, skipped; their boxes now are in the second grids.
   new_vertex_.assign(particle_count_, 0);
   for (const std::uint32_t i : outran_) new_vertex_[i] = 1;
   chunks_->triangle_point_candidates.run(

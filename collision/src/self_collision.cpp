@@ -393,9 +393,17 @@ constexpr auto by_pair = [](const auto& l, const auto& r) {
   return l.first != r.first ? l.first < r.first : l.second < r.second;
 };
 
+/// Per particle or primitive, the least range a task takes: cheap bodies.
+constexpr std::size_t kItemGrain = 2048;
+/// Per leaf of 16 (or 8) primitives: a body 16 times the work, and a mesh of 10^4–10^5
+/// primitives has only 10^3–10^4 leaves (at kItemGrain, the 128² drape's 1,024 vertex leaves
+/// were one task and its 2,048 triangle leaves one or two: a build's leaf work ran on one
+/// thread).
+constexpr std::size_t kLeafGrain = 32;
+
 template <class Body>
-void parallel_over(std::size_t n, Body&& body) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 2048),
+void parallel_over(std::size_t n, Body&& body, std::size_t grain = kItemGrain) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t i = range.begin(); i != range.end(); ++i) body(i);
                     });
@@ -751,7 +759,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
     leaves_ordered_ = true;
   }
   constexpr std::size_t kLanes = detail::PrimitiveLeaves::kLeafSize;
-  const auto parallel = [](std::size_t n, auto&& body) { parallel_over(n, body); };
+  const auto parallel = [](std::size_t n, auto&& body) { parallel_over(n, body, kLeafGrain); };
   leaves.vertices.box(vertex_boxes_, parallel, /*grid=*/false);  // they query only
   leaves.triangles.box(triangle_boxes_, parallel);
   // Each leaf's lanes: the coordinates, then the tail (segment_distances.hpp, LeafField). A
@@ -796,7 +804,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
       fill_tail(leaves.triangle_fields, leaf, k, 9, record, padding ? kEmptyBox : triangle_boxes_[t],
                 triangles_.data() + 3 * std::size_t(t), 3);
     }
-  });
+  }, kLeafGrain);
   if (edge_queries > 0) {
     leaves.edges.box(edge_boxes_, parallel);
     parallel_over(leaves.edges.leaf_count(), [&](std::size_t leaf) {
@@ -814,7 +822,7 @@ Vector3r SelfCollision::build(const SelfCollisionPositions& positions,
         fill_tail(leaves.edge_fields, leaf, k, 6, record, padding ? kEmptyBox : edge_boxes_[e],
                   edges_.data() + 2 * std::size_t(e), 2);
       }
-    });
+    }, kLeafGrain);
   }
   const Real steps = substeps_allowed();
 

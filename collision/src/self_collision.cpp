@@ -72,6 +72,10 @@ constexpr Aabb kEmptyBox{{std::numeric_limits<Real>::max(), std::numeric_limits<
 /// Leaves per chunk of a build's chunked loops (chunked_output.hpp): kCollisionChunk / 2
 /// primitives, each a query.
 constexpr std::size_t kLeafChunk = detail::kCollisionChunk / 2 / detail::kBlockLanes;
+/// Queries per chunk of a re-box's loops over its outran vertices and new edges: a re-box
+/// of the 128² drape has ~190 and ~730, about a microsecond each. At kCollisionChunk they
+/// were one and two tasks, so the vertices' queries ran on one thread.
+constexpr std::size_t kReboxQueryChunk = 32;
 }  // namespace
 
 struct SelfCollision::Leaves {
@@ -1084,7 +1088,7 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
         std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
                   [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
       },
-      found_triangle_point_);
+      found_triangle_point_, kReboxQueryChunk);
   if (!new_triangles_.empty()) {
     Aabb reach_of_new = triangle_box(new_triangles_[0]);
     for (const std::uint32_t t : new_triangles_) {
@@ -1134,7 +1138,7 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
             });
           });
         },
-        found_edge_edge_);
+        found_edge_edge_, kReboxQueryChunk);
     // The pairs are unique (each found from one new edge; a pair of two new edges from the
     // lower), so their sorted order is one, whatever the sort and the threads.
     tbb::parallel_sort(found_edge_edge_.begin(), found_edge_edge_.end(), by_pair);

@@ -1157,15 +1157,19 @@ void SelfCollision::sort_candidates(std::vector<Candidate>& candidates, std::siz
   merged_.resize(candidates.size());
   for (const Candidate& pair : candidates) merged_[key_start_[pair.first]++] = pair;
   candidates.swap(merged_);
-  // key_start_[k] is now the end of key k's run.
-  std::size_t begin = 0;
-  for (std::size_t k = 0; k < keys; ++k) {
-    const std::size_t end = key_start_[k];
-    if (end - begin > 1)
-      std::sort(candidates.begin() + std::ptrdiff_t(begin), candidates.begin() + std::ptrdiff_t(end),
+  // key_start_[k] is now the end of key k's run; the runs are sorted in parallel, each on
+  // its own (a few pairs: an insertion sort, without std::sort's set-up per run).
+  parallel_over(keys, [&](std::size_t k) {
+    Candidate* const first = candidates.data() + (k == 0 ? 0 : key_start_[k - 1]);
+    Candidate* const last = candidates.data() + key_start_[k];
+    if (last - first > 16) {
+      std::sort(first, last,
                 [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
-    begin = end;
-  }
+      return;
+    }
+    for (Candidate* i = first + 1; i < last; ++i)
+      for (Candidate* j = i; j > first && j[0].second < j[-1].second; --j) std::swap(j[0], j[-1]);
+  });
 }
 
 void SelfCollision::merge_sorted(std::vector<Candidate>& into, const std::vector<Candidate>& more,

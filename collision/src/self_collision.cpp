@@ -499,13 +499,19 @@ Vector3r median_of(std::size_t count, Of&& of, std::vector<Real>& scratch) {
   Vector3r median = Vector3r::Zero();
   if (count == 0) return median;
   const std::size_t samples = std::min(count, kMedianSample);
-  scratch.resize(samples);
-  for (int axis = 0; axis < 3; ++axis) {
-    for (std::size_t k = 0; k < samples; ++k) scratch[k] = of(k * count / samples)[axis];
-    const auto middle = scratch.begin() + std::ptrdiff_t(samples / 2);
-    std::nth_element(scratch.begin(), middle, scratch.end());
-    median[axis] = *middle;
+  // Each sample read once (all three axes), then the axes' medians side by side (each an
+  // nth_element of its own, ~15 µs: a substep's serial part otherwise).
+  scratch.resize(3 * samples);
+  for (std::size_t k = 0; k < samples; ++k) {
+    const Vector3r v = of(k * count / samples);
+    for (int axis = 0; axis < 3; ++axis) scratch[std::size_t(axis) * samples + k] = v[axis];
   }
+  tbb::parallel_for(0, 3, [&](int axis) {
+    const auto begin = scratch.begin() + std::ptrdiff_t(std::size_t(axis) * samples);
+    const auto middle = begin + std::ptrdiff_t(samples / 2);
+    std::nth_element(begin, middle, begin + std::ptrdiff_t(samples));
+    median[axis] = *middle;
+  });
   return median;
 }
 

@@ -76,6 +76,13 @@ constexpr std::size_t kLeafChunk = detail::kCollisionChunk / 2 / detail::kBlockL
 /// of the 128² drape has ~190 and ~730, about a microsecond each. At kCollisionChunk they
 /// were one and two tasks, so the vertices' queries ran on one thread.
 constexpr std::size_t kReboxQueryChunk = 32;
+/// parallel_over's grain (a range of at most this many items is not split): per particle
+/// or primitive, cheap bodies.
+constexpr std::size_t kItemGrain = 2048;
+/// Per leaf of kBlockLanes primitives: a body kBlockLanes times the work, and a mesh of
+/// 10^4–10^5 primitives has only 10^3–10^4 leaves. At kItemGrain the 128² drape's 1,024
+/// vertex leaves and 2,017 triangle leaves were one task each.
+constexpr std::size_t kLeafGrain = 32;
 }  // namespace
 
 struct SelfCollision::Leaves {
@@ -396,14 +403,6 @@ EdgeBatch& edge_batch() {
 constexpr auto by_pair = [](const auto& l, const auto& r) {
   return l.first != r.first ? l.first < r.first : l.second < r.second;
 };
-
-/// Per particle or primitive, the least range a task takes: cheap bodies.
-constexpr std::size_t kItemGrain = 2048;
-/// Per leaf of 16 (or 8) primitives: a body 16 times the work, and a mesh of 10^4–10^5
-/// primitives has only 10^3–10^4 leaves (at kItemGrain, the 128² drape's 1,024 vertex leaves
-/// were one task and its 2,048 triangle leaves one or two: a build's leaf work ran on one
-/// thread).
-constexpr std::size_t kLeafGrain = 32;
 
 template <class Body>
 void parallel_over(std::size_t n, Body&& body, std::size_t grain = kItemGrain) {
@@ -1164,17 +1163,11 @@ void SelfCollision::sort_candidates(std::vector<Candidate>& candidates, std::siz
   for (const Candidate& pair : candidates) merged_[key_start_[pair.first]++] = pair;
   candidates.swap(merged_);
   // key_start_[k] is now the end of key k's run; the runs are sorted in parallel, each on
-  // its own (a few pairs: an insertion sort, without std::sort's set-up per run).
+  // its own (the pairs are unique, so the order is one whatever the threads).
   parallel_over(keys, [&](std::size_t k) {
-    Candidate* const first = candidates.data() + (k == 0 ? 0 : key_start_[k - 1]);
-    Candidate* const last = candidates.data() + key_start_[k];
-    if (last - first > 16) {
-      std::sort(first, last,
-                [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
-      return;
-    }
-    for (Candidate* i = first + 1; i < last; ++i)
-      for (Candidate* j = i; j > first && j[0].second < j[-1].second; --j) std::swap(j[0], j[-1]);
+    std::sort(candidates.data() + (k == 0 ? 0 : key_start_[k - 1]),
+              candidates.data() + key_start_[k],
+              [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
   });
 }
 

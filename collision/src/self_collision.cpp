@@ -399,10 +399,11 @@ EdgeBatch& edge_batch() {
   return batch;
 }
 
-/// The candidate lists' order: by first, then by second.
+/// The candidate lists' order: by first, then by second; within one first, by second.
 constexpr auto by_pair = [](const auto& l, const auto& r) {
   return l.first != r.first ? l.first < r.first : l.second < r.second;
 };
+constexpr auto by_second = [](const auto& l, const auto& r) { return l.second < r.second; };
 
 template <class Body>
 void parallel_over(std::size_t n, Body&& body, std::size_t grain = kItemGrain) {
@@ -1090,8 +1091,7 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
           reboxed_triangle_grid_.for_each_overlap(
               box, [&](std::uint32_t entry) { visit(reboxed_triangles_[entry]); });
         });
-        std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
-                  [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
+        std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(), by_second);
       },
       found_triangle_point_, kReboxQueryChunk);
   if (!new_triangles_.empty()) {
@@ -1116,8 +1116,7 @@ bool SelfCollision::rebox(const SelfCollisionPositions& positions,
               if (new_triangle_[t]) visit(t);
             });
           });
-          std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(),
-                    [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
+          std::sort(buffer.begin() + std::ptrdiff_t(first), buffer.end(), by_second);
         },
         found_others_);
     merge_sorted(found_triangle_point_, found_others_);
@@ -1166,8 +1165,7 @@ void SelfCollision::sort_candidates(std::vector<Candidate>& candidates, std::siz
   // its own (the pairs are unique, so the order is one whatever the threads).
   parallel_over(keys, [&](std::size_t k) {
     std::sort(candidates.data() + (k == 0 ? 0 : key_start_[k - 1]),
-              candidates.data() + key_start_[k],
-              [](const Candidate& l, const Candidate& r) { return l.second < r.second; });
+              candidates.data() + key_start_[k], by_second);
   });
 }
 
@@ -1214,10 +1212,14 @@ void SelfCollision::merge_sorted(std::vector<Candidate>& into, const std::vector
                        }) -
         first);
   };
-  if (blocks == 1)
-    keep(0);
-  else
-    tbb::parallel_for(std::size_t(0), blocks, keep);
+  // Each block by a task, or one block without TBB.
+  const auto for_each_block = [&](auto&& body) {
+    if (blocks == 1)
+      body(std::size_t(0));
+    else
+      tbb::parallel_for(std::size_t(0), blocks, body);
+  };
+  for_each_block(keep);
   for (std::size_t b = 0; b < blocks; ++b) merge_kept_[b + 1] += merge_kept_[b];
   merged_.resize(merge_kept_[blocks] + more.size());
   // Block b's kept pairs: into [block_begin(b), + merge_kept_[b + 1] − merge_kept_[b]).
@@ -1228,10 +1230,7 @@ void SelfCollision::merge_sorted(std::vector<Candidate>& into, const std::vector
                more.begin() + std::ptrdiff_t(run), more.begin() + std::ptrdiff_t(merge_run_[b + 1]),
                merged_.begin() + std::ptrdiff_t(merge_kept_[b] + run), by_pair);
   };
-  if (blocks == 1)
-    merge(0);
-  else
-    tbb::parallel_for(std::size_t(0), blocks, merge);
+  for_each_block(merge);
   into.swap(merged_);
 }
 

@@ -32,10 +32,6 @@
 namespace tessera::cli {
 namespace {
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 /// MPI for the length of the command (initialised here unless the caller already did).
 class MpiSession {
  public:

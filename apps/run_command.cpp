@@ -31,10 +31,6 @@
 namespace tessera::cli {
 namespace {
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 /// The scene's settings with the command line's overrides.
 io::SimulationSettings simulation_of(const io::SceneDescription& scene, const RunOptions& options) {
   io::SimulationSettings simulation = scene.simulation;

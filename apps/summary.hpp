@@ -2,6 +2,7 @@
 // lines for people or as one JSON object for scripts (same keys, same order).
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <ostream>
@@ -12,6 +13,11 @@
 #include <tessera/parallel/residual.hpp>
 
 namespace tessera::cli {
+
+/// Wall seconds from `start` to now: the summary's seconds_* figures.
+inline double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 class Summary {
  public:

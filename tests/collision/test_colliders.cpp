@@ -21,7 +21,7 @@
 #include <tessera/io/mesh_readers.hpp>
 
 namespace tessera {
-namespace {
+namespace colliders_tests {
 
 constexpr Real kTolerance = kDoublePrecision ? Real(1e-9) : Real(2e-5);
 
@@ -618,5 +618,5 @@ TEST(Colliders, BadInputIsNamed) {
   EXPECT_TRUE(contains(mesh_error({0, 1, 3}), "triangle 0 is degenerate: its corners"));
 }
 
-}  // namespace
+}  // namespace colliders_tests
 }  // namespace tessera

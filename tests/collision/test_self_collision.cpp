@@ -26,7 +26,7 @@
 #include "triangle_distances.hpp"
 
 namespace tessera {
-namespace {
+namespace self_collision_tests {
 
 using Contacts = SelfCollision::Contacts;
 
@@ -1201,5 +1201,5 @@ TEST(SelfCollision, TheSameContactsOnOneAndTwoThreads) {
   EXPECT_EQ(one.edge_edge, two.edge_edge);
 }
 
-}  // namespace
+}  // namespace self_collision_tests
 }  // namespace tessera

@@ -12,7 +12,7 @@
 #include <tessera/io/generators.hpp>
 
 namespace tessera {
-namespace {
+namespace self_intersections_tests {
 
 using Eigen::Vector3d;
 
@@ -121,5 +121,5 @@ TEST(SelfIntersections, InvalidInputIsRefused) {
   EXPECT_THROW(count(positions, {0, 1}), InvalidInput);
 }
 
-}  // namespace
+}  // namespace self_intersections_tests
 }  // namespace tessera

@@ -15,7 +15,7 @@
 #include <tessera/io/generators.hpp>
 
 namespace tessera {
-namespace {
+namespace solid_contacts_tests {
 
 constexpr Real kThickness = Real(0.05);
 
@@ -163,5 +163,5 @@ TEST(SolidContacts, PenetrationDepthIsHowDeepABoundaryVertexIsInsideAnotherBody)
                InvalidInput);
 }
 
-}  // namespace
+}  // namespace solid_contacts_tests
 }  // namespace tessera

@@ -14,7 +14,7 @@
 #include <tessera/core/error.hpp>
 
 namespace tessera {
-namespace {
+namespace spatial_hash_tests {
 
 std::vector<Aabb> random_boxes(std::size_t n, Real largest, unsigned seed) {
   std::mt19937 random(seed);
@@ -132,5 +132,5 @@ TEST(UniformGrid, TheSamePairsOnOneAndTwoThreads) {
   EXPECT_EQ(one, pairs_on(2));
 }
 
-}  // namespace
+}  // namespace spatial_hash_tests
 }  // namespace tessera

@@ -12,7 +12,7 @@
 #include "test_meshes.hpp"
 
 namespace tessera {
-namespace {
+namespace colouring_tests {
 
 TEST(Colouring, GroupsConstraintsByColourInIdOrderOrAGivenOrder) {
   const Colouring c = Colouring::from_colours({1, 0, 1, 2, 0});
@@ -113,5 +113,5 @@ TEST(Colouring, LargeInputGroupedInParallelAsSequentially) {
   EXPECT_THROW(Colouring::from_colours(colours), InvalidInput);
 }
 
-}  // namespace
+}  // namespace colouring_tests
 }  // namespace tessera

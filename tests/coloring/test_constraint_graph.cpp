@@ -19,7 +19,7 @@
 #include "test_meshes.hpp"
 
 namespace tessera {
-namespace {
+namespace constraint_graph_tests {
 
 std::vector<ParticleIndex> as_vector(std::span<const ParticleIndex> s) { return {s.begin(), s.end()}; }
 
@@ -343,5 +343,5 @@ TEST(ConstraintGraph, ModelGraphEqualsInterleavedGroups) {
   EXPECT_EQ(from_model.group_name(0), "distance");
 }
 
-}  // namespace
+}  // namespace constraint_graph_tests
 }  // namespace tessera

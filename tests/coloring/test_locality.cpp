@@ -13,7 +13,7 @@
 #include "test_meshes.hpp"
 
 namespace tessera {
-namespace {
+namespace locality_tests {
 
 bool is_permutation_of_particles(std::span<const ParticleIndex> order, std::size_t n) {
   std::vector<ParticleIndex> sorted(order.begin(), order.end());
@@ -132,5 +132,5 @@ TEST(ImproveLocality, RunsAsTheLastPostPass) {
   }
 }
 
-}  // namespace
+}  // namespace locality_tests
 }  // namespace tessera

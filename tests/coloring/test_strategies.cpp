@@ -21,7 +21,7 @@
 #include "test_meshes.hpp"
 
 namespace tessera {
-namespace {
+namespace strategies_tests {
 
 const ColouringRegistry& registry() {
   static const ColouringRegistry instance = ColouringRegistry::with_builtin_strategies();
@@ -531,5 +531,5 @@ TEST(Stencil, EqualsFirstFitInRankAnchorIdOrderForAnyThreadCount) {
   }
 }
 
-}  // namespace
+}  // namespace strategies_tests
 }  // namespace tessera

@@ -14,7 +14,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace collider_contact_tests {
 
 using test::Random;
 using PBD = PositionBasedDynamicsExtensions;
@@ -418,5 +418,5 @@ TEST(ColliderContactBatchValidation, BuildsThePerContactArraysAndChecksRanges) {
                InvalidInput);
 }
 
-}  // namespace
+}  // namespace collider_contact_tests
 }  // namespace tessera

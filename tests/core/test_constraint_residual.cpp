@@ -17,7 +17,7 @@
 #include "test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace constraint_residual_tests {
 
 using test::Random;
 
@@ -982,5 +982,5 @@ TEST(BatchedResiduals, ShapeMatching) {
   }
 }
 
-}  // namespace
+}  // namespace constraint_residual_tests
 }  // namespace tessera

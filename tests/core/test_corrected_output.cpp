@@ -20,7 +20,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace corrected_output_tests {
 
 using test::Random;
 
@@ -153,5 +153,5 @@ TEST(CorrectedOutput, ShapeMatchingStoresEachEntryOfItsCluster) {
       5 * kCount);
 }
 
-}  // namespace
+}  // namespace corrected_output_tests
 }  // namespace tessera

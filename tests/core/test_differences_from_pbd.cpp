@@ -13,7 +13,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace differences_from_pbd_tests {
 
 using PBD = PositionBasedDynamics;
 constexpr Real kPi = std::numbers::pi_v<Real>;
@@ -506,5 +506,5 @@ TEST(DifferencesFromPBD, FEMTetraAcceptsEveryPoissonRatioInMinusOneToHalf) {
   }
 }
 
-}  // namespace
+}  // namespace differences_from_pbd_tests
 }  // namespace tessera::test

@@ -11,7 +11,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace dihedral_tests {
 
 using Points = std::array<Vector3r, 4>;
 using Masses = std::array<Real, 4>;
@@ -215,5 +215,5 @@ TEST(DihedralConstraint, NearDegenerateInputStaysFinite) {
       306, 3, [](Random& random) { return random.uniform(0, kPi); }, project, project_xpbd);
 }
 
-}  // namespace
+}  // namespace dihedral_tests
 }  // namespace tessera::test

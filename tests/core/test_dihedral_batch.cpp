@@ -13,7 +13,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace dihedral_batch_tests {
 
 using test::Random;
 using Stencil = std::array<Vector3r, 4>;
@@ -224,5 +224,5 @@ TEST(DihedralBatchValidation, RangeAndParticleCountAreChecked) {
                InvalidInput);
 }
 
-}  // namespace
+}  // namespace dihedral_batch_tests
 }  // namespace tessera

@@ -7,7 +7,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace distance_tests {
 
 using Points = std::array<Vector3r, 2>;
 using Masses = std::array<Real, 2>;
@@ -226,5 +226,5 @@ TEST(DistanceConstraint, NearDegenerateInputStaysFinite) {
       106, 1, [](Random& random) { return random.uniform(0, 1); }, project, project_xpbd);
 }
 
-}  // namespace
+}  // namespace distance_tests
 }  // namespace tessera::test

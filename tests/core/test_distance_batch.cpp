@@ -8,7 +8,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace distance_batch_tests {
 
 using test::Random;
 
@@ -110,5 +110,5 @@ TEST(DistanceBatchValidation, RangeAndParticleCountAreChecked) {
                InvalidInput);
 }
 
-}  // namespace
+}  // namespace distance_batch_tests
 }  // namespace tessera

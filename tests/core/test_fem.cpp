@@ -10,7 +10,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace fem_tests {
 
 using PBD = PositionBasedDynamics;
 
@@ -559,5 +559,5 @@ TEST(XPBDFEMTetra, InvalidInputLeavesTheMultiplierUnchanged) {
   for (const auto& c : rest.corr) EXPECT_EQ(c, Vector3r::Zero());
 }
 
-}  // namespace
+}  // namespace fem_tests
 }  // namespace tessera::test

@@ -19,7 +19,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace fem_batch_tests {
 
 using test::Random;
 using PBD = PositionBasedDynamics;
@@ -592,5 +592,5 @@ TEST(FEMBatchValidation, RangeAndParticleCountAreChecked) {
                InvalidInput);
 }
 
-}  // namespace
+}  // namespace fem_batch_tests
 }  // namespace tessera

@@ -9,7 +9,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace green_strain_tests {
 
 using PBD = PositionBasedDynamics;
 
@@ -218,5 +218,5 @@ TEST(GreenStrain, DegenerateInputStaysFinite) {
               kRoundOff * point.energy);
 }
 
-}  // namespace
+}  // namespace green_strain_tests
 }  // namespace tessera::test

@@ -13,7 +13,7 @@
 #include <tessera/core/huge_pages.hpp>
 
 namespace tessera {
-namespace {
+namespace huge_pages_tests {
 
 TEST(HugePages, LargeVectorsHoldWhatTheyWereGiven) {
   const std::vector<int> filled = make_large_vector<int>(3'000'000, 7);
@@ -77,5 +77,5 @@ TEST(HugePages, AdvisedArraysAreBackedByHugePagesWhereTheKernelOffersThem) {
   EXPECT_GE(aligned_kilobytes, 2048) << transparent_huge_page_mode();
 }
 
-}  // namespace
+}  // namespace huge_pages_tests
 }  // namespace tessera

@@ -11,7 +11,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace isometric_bending_tests {
 
 using Points = std::array<Vector3r, 4>;
 using Masses = std::array<Real, 4>;
@@ -347,5 +347,5 @@ TEST(IsometricBending, NearDegenerateInputStaysFinite) {
   }
 }
 
-}  // namespace
+}  // namespace isometric_bending_tests
 }  // namespace tessera::test

@@ -12,7 +12,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace isometric_bending_batch_tests {
 
 using test::Random;
 using Stencil = std::array<Vector3r, 4>;
@@ -251,5 +251,5 @@ TEST(IsometricBendingBatchValidation, RangeAndParticleCountAreChecked) {
       InvalidInput);
 }
 
-}  // namespace
+}  // namespace isometric_bending_batch_tests
 }  // namespace tessera

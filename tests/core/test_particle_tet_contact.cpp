@@ -7,7 +7,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace particle_tet_contact_tests {
 
 using PBD = PositionBasedDynamics;
 using Info = Eigen::Matrix<Real, 3, 3, Eigen::DontAlign>;
@@ -314,5 +314,5 @@ TEST(ParticleTetContact, NoFrictionWithoutSlidingOrNormalImpulse) {
   expect_none(velocity_solve(s, info, Real(1), Real(0.5)));
 }
 
-}  // namespace
+}  // namespace particle_tet_contact_tests
 }  // namespace tessera::test

@@ -8,7 +8,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace particle_tet_contact_batch_tests {
 
 using test::Random;
 using PBD = PositionBasedDynamics;
@@ -336,5 +336,5 @@ TEST(ParticleTetContactBatchValidation, StaticPairsAreKeptInactiveAndRangesCheck
       InvalidInput);
 }
 
-}  // namespace
+}  // namespace particle_tet_contact_batch_tests
 }  // namespace tessera

@@ -8,7 +8,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace proximity_tests {
 
 template <std::size_t N>
 using Points = std::array<Vector3r, N>;
@@ -582,5 +582,5 @@ TEST(ProximityConstraints, NearDegenerateInputStaysFinite) {
   }
 }
 
-}  // namespace
+}  // namespace proximity_tests
 }  // namespace tessera::test

@@ -12,7 +12,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace proximity_batch_tests {
 
 using test::Random;
 
@@ -640,5 +640,5 @@ TEST(ProximityBatchValidation, EdgeEdgeRangeParticlesAndSemanticsAreChecked) {
   check_projection_checks<EdgeEdge>();
 }
 
-}  // namespace
+}  // namespace proximity_batch_tests
 }  // namespace tessera

@@ -14,7 +14,7 @@
 #include <tessera/core/position_based_dynamics.hpp>
 
 namespace tessera {
-namespace {
+namespace scale_invariance_tests {
 
 using PBD = PositionBasedDynamics;
 
@@ -98,5 +98,5 @@ TEST(ScaleInvariance, DihedralCorrectionsScaleWithTheStencil) {
   }
 }
 
-}  // namespace
+}  // namespace scale_invariance_tests
 }  // namespace tessera

@@ -22,7 +22,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace sequential_projection_tests {
 
 using test::Random;
 using PBD = PositionBasedDynamics;
@@ -1262,5 +1262,5 @@ TEST(SequentialProjectionShapeMatching, EmptyAndBadRangesAreHandledAtTheDoor) {
   EXPECT_TRUE(test::same_bits(state, before));
 }
 
-}  // namespace
+}  // namespace sequential_projection_tests
 }  // namespace tessera

@@ -9,7 +9,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace shape_matching_tests {
 
 using PBD = PositionBasedDynamics;
 constexpr int kPoints = 7;
@@ -305,5 +305,5 @@ TEST(ShapeMatching, DegenerateClustersAreRefused) {
                                                   1, false, corr.data()));
 }
 
-}  // namespace
+}  // namespace shape_matching_tests
 }  // namespace tessera::test

@@ -9,7 +9,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace shape_matching_batch_tests {
 
 using test::Random;
 using PBD = PositionBasedDynamics;
@@ -313,5 +313,5 @@ TEST(ShapeMatchingBatchValidation, RangeAndParticleCountAreChecked) {
                InvalidInput);
 }
 
-}  // namespace
+}  // namespace shape_matching_batch_tests
 }  // namespace tessera

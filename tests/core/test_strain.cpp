@@ -7,7 +7,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace strain_tests {
 
 using PBD = PositionBasedDynamics;
 
@@ -402,5 +402,5 @@ TEST(StrainTetra, DegenerateInputGivesFalseAndZeroCorrections) {
   EXPECT_TRUE(all_finite(solve_tet(flat, {1, 1, 1, 1}, t.inv_rest, ones, ones, true, true).corr));
 }
 
-}  // namespace
+}  // namespace strain_tests
 }  // namespace tessera::test

@@ -10,7 +10,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace strain_batch_tests {
 
 using test::Random;
 using PBD = PositionBasedDynamics;
@@ -345,5 +345,5 @@ TEST(StrainBatchValidation, RangeAndParticleCountAreChecked) {
                InvalidInput);
 }
 
-}  // namespace
+}  // namespace strain_batch_tests
 }  // namespace tessera

@@ -15,7 +15,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace tether_tests {
 
 using test::Random;
 using PBD = PositionBasedDynamicsExtensions;
@@ -361,5 +361,5 @@ TEST(LongRangeAttachments, BadInputIsNamed) {
             "long-range attachments: attachments per particle must be at least 1");
 }
 
-}  // namespace
+}  // namespace tether_tests
 }  // namespace tessera

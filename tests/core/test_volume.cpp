@@ -8,7 +8,7 @@
 #include "test_support.hpp"
 
 namespace tessera::test {
-namespace {
+namespace volume_tests {
 
 using Points = std::array<Vector3r, 4>;
 using Masses = std::array<Real, 4>;
@@ -177,5 +177,5 @@ TEST(VolumeConstraint, NearDegenerateInputStaysFinite) {
       206, 3, [](Random& random) { return random.uniform(-0.2, 0.2); }, project, project_xpbd);
 }
 
-}  // namespace
+}  // namespace volume_tests
 }  // namespace tessera::test

@@ -10,7 +10,7 @@
 #include "batch_test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace volume_batch_tests {
 
 using test::Random;
 using Tetrahedron = std::array<Vector3r, 4>;
@@ -198,5 +198,5 @@ TEST(VolumeBatchValidation, RangeAndParticleCountAreChecked) {
                InvalidInput);
 }
 
-}  // namespace
+}  // namespace volume_batch_tests
 }  // namespace tessera

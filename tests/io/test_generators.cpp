@@ -11,7 +11,7 @@
 #include <tessera/io/generators.hpp>
 
 namespace tessera::io {
-namespace {
+namespace generators_tests {
 
 Real signed_volume(const TetrahedralBar& bar, std::size_t t) {
   const VertexIndex* v = bar.tetrahedron_indices.data() + 4 * t;
@@ -175,5 +175,5 @@ TEST(Generators, RejectBadSizes) {
   EXPECT_THROW(unique_edges({0, 1, 2, 3}, 3, 5), InvalidInput);
 }
 
-}  // namespace
+}  // namespace generators_tests
 }  // namespace tessera::io

@@ -19,7 +19,7 @@
 #include <tessera/io/mesh_readers.hpp>
 
 namespace tessera::io {
-namespace {
+namespace mesh_readers_tests {
 
 const std::filesystem::path kDataDir = TESSERA_TEST_DATA_DIR;
 
@@ -826,5 +826,5 @@ TEST(ReadMeshRobustness, RandomEditsOfValidFiles) {
   }
 }
 
-}  // namespace
+}  // namespace mesh_readers_tests
 }  // namespace tessera::io

@@ -24,7 +24,7 @@
 #include <tessera/io/mesh_writers.hpp>
 
 namespace tessera::io {
-namespace {
+namespace mesh_writers_tests {
 
 namespace fs = std::filesystem;
 
@@ -599,5 +599,5 @@ TEST_F(MeshWriters, ConcurrentWritersOfOneFileLeaveOneCompleteFrame) {
   EXPECT_EQ(listing(folder()), std::vector<std::string>{"frame.vtu"});
 }
 
-}  // namespace
+}  // namespace mesh_writers_tests
 }  // namespace tessera::io

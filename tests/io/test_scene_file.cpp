@@ -14,7 +14,7 @@
 #include <tessera/core/error.hpp>
 
 namespace tessera::io {
-namespace {
+namespace scene_file_tests {
 
 SceneDescription from_json(const std::string& text) {
   std::istringstream in(text);
@@ -451,5 +451,5 @@ TEST(BoundaryTriangles, SharedFacesAreInside) {
   EXPECT_EQ(faces.size() / 3, 2u * 2u * (2 * 3 + 3 * 4 + 2 * 4));
 }
 
-}  // namespace
+}  // namespace scene_file_tests
 }  // namespace tessera::io

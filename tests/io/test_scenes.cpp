@@ -20,7 +20,7 @@
 #include <tessera/io/scenes.hpp>
 
 namespace tessera::io {
-namespace {
+namespace scenes_tests {
 
 const std::filesystem::path kDataDir = TESSERA_TEST_DATA_DIR;
 
@@ -484,5 +484,5 @@ TEST(Validation, OptionsOutOfRange) {
             "bar scene: distance_compliance is -1, expected a finite number >= 0");
 }
 
-}  // namespace
+}  // namespace scenes_tests
 }  // namespace tessera::io

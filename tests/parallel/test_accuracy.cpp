@@ -22,7 +22,7 @@
 #include "test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace accuracy_tests {
 
 using test::make_solver;
 
@@ -226,5 +226,5 @@ TEST(Tethers, AnyThreadCountAndEveryModeGiveBitwiseTheSameState) {
   }
 }
 
-}  // namespace
+}  // namespace accuracy_tests
 }  // namespace tessera

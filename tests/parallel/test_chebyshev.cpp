@@ -18,7 +18,7 @@
 #include "test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace chebyshev_tests {
 
 using test::same_bits;
 
@@ -196,5 +196,5 @@ TEST(Chebyshev, RejectsABadRhoOrDelayNamingTheSetting) {
   EXPECT_EQ(message([](SolverSettings& s) { s.chebyshev_rho = Real(0.5); }), "no error");
 }
 
-}  // namespace
+}  // namespace chebyshev_tests
 }  // namespace tessera

@@ -20,7 +20,7 @@
 #include "scenes.hpp"
 
 namespace tessera {
-namespace {
+namespace collisions_tests {
 
 using test::make_solver;
 using test::same_bits;
@@ -407,5 +407,5 @@ TEST(Collisions, StaticParticlesNeverMoveAndBadSettingsAreErrors) {
   EXPECT_EQ(solver.contacts().size(), 0u);
 }
 
-}  // namespace
+}  // namespace collisions_tests
 }  // namespace tessera

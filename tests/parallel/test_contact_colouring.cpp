@@ -18,7 +18,7 @@
 #include "contact_colouring.hpp"
 
 namespace tessera {
-namespace {
+namespace contact_colouring_tests {
 
 /// The vertices of a 10 × 10 cloth; vertex 0 is static.
 struct Cloth {
@@ -179,5 +179,5 @@ TEST(ContactColouring, AStaticParticleSeparatesNothingAndTheSixtyFifthContactOve
   expect_valid(reused, fewer, cloth.inverse_mass);
 }
 
-}  // namespace
+}  // namespace contact_colouring_tests
 }  // namespace tessera

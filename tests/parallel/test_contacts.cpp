@@ -18,7 +18,7 @@
 #include "scenes.hpp"
 
 namespace tessera {
-namespace {
+namespace contacts_tests {
 
 using test::make_solver;
 using test::same_bits;
@@ -261,5 +261,5 @@ TEST(ColliderContacts, BlockSlidesDownASlopeWithCoulombsDeceleration) {
   }
 }
 
-}  // namespace
+}  // namespace contacts_tests
 }  // namespace tessera

@@ -17,7 +17,7 @@
 #include "scenes.hpp"
 
 namespace tessera {
-namespace {
+namespace particle_layout_tests {
 
 Model scene_model(const std::string& spec, const std::string& material) {
   io::SceneDescription description = io::parse_scene_spec(spec);
@@ -123,5 +123,5 @@ TEST(ParticleLayout, ANamedLayoutParsesAndAnUnknownOneIsNamed) {
   }
 }
 
-}  // namespace
+}  // namespace particle_layout_tests
 }  // namespace tessera

@@ -20,7 +20,7 @@
 #include "scenes.hpp"
 
 namespace tessera {
-namespace {
+namespace phase_region_tests {
 
 /// Runs a region of `phases` × `shares` on `threads` threads (thread t runs share t; shares
 /// without a thread are taken over) and checks each share ran once, in phase order.
@@ -306,5 +306,5 @@ TEST(PhaseRegion, ManySubstepsSplitIntoRegionsGiveTheBitsOfOneByOne) {
   EXPECT_TRUE(test::same_bits(positions[0], positions[1]));
 }
 
-}  // namespace
+}  // namespace phase_region_tests
 }  // namespace tessera

@@ -17,7 +17,7 @@
 #include "scenes.hpp"
 
 namespace tessera {
-namespace {
+namespace schedule_tests {
 
 using test::BarMaterial;
 using test::ClothBending;
@@ -325,5 +325,5 @@ TEST(Schedule, ModeNamesRoundTrip) {
   EXPECT_THROW(parse_solver_mode("gauss-seidel"), InvalidInput);
 }
 
-}  // namespace
+}  // namespace schedule_tests
 }  // namespace tessera

@@ -21,7 +21,7 @@
 #include "test_support.hpp"
 
 namespace tessera {
-namespace {
+namespace solver_tests {
 
 using test::BarMaterial;
 using test::ClothBending;
@@ -509,5 +509,5 @@ TEST(SolverPhaseHook, RunsBeforeTheColoursAndAfterEachInOrderAndChangesNothingBy
             "gs has)");
 }
 
-}  // namespace
+}  // namespace solver_tests
 }  // namespace tessera

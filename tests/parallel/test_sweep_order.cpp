@@ -17,7 +17,7 @@
 #include "scenes.hpp"
 
 namespace tessera {
-namespace {
+namespace sweep_order_tests {
 
 SolverSettings settings_with(SweepOrder order, std::size_t threads) {
   SolverSettings settings;
@@ -167,5 +167,5 @@ TEST(SweepOrder, WrongUseIsAClearError) {
   expect_error([] { parse_sweep_order("row-major"); }, "unknown sweep order 'row-major'");
 }
 
-}  // namespace
+}  // namespace sweep_order_tests
 }  // namespace tessera

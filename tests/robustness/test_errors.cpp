@@ -23,7 +23,7 @@
 #include "scenes.hpp"
 
 namespace tessera {
-namespace {
+namespace errors_tests {
 
 const std::filesystem::path kDataDir = TESSERA_TEST_DATA_DIR;
 constexpr Real kNaN = std::numeric_limits<Real>::quiet_NaN();
@@ -451,5 +451,5 @@ TEST(ErrorCatalogue, WrongMagic) {
             "cube.node:1: point count 'v' is not an integer");
 }
 
-}  // namespace
+}  // namespace errors_tests
 }  // namespace tessera

@@ -19,7 +19,7 @@
 #include "scenes.hpp"
 
 namespace tessera {
-namespace {
+namespace numerics_tests {
 
 using test::make_solver;
 using test::same_bits;
@@ -352,5 +352,5 @@ TEST(Numerics, AllParticlesStaticNeverMove) {
   }
 }
 
-}  // namespace
+}  // namespace numerics_tests
 }  // namespace tessera

@@ -4,7 +4,7 @@
 // that allocates per step without freeing (a growing history, a per-step buffer that is
 // never reused) shows up here long before it shows up in a user's program.
 //
-//   TESSERA_SOAK_SUBSTEPS=5000   fewer substeps (CI runs it once so, see .ci/run)
+//   TESSERA_SOAK_SUBSTEPS=20000  fewer substeps (CI runs it once so, see .ci/run)
 //
 // Memory is the resident set from /proc/self/statm, measured after the warm-up (the first
 // half of the substeps: every buffer has reached its size), at three quarters and at the end.

@@ -30,12 +30,15 @@ inline constexpr Real kBatchTolerance = kDoublePrecision ? Real(1e-12) : Real(1e
 /// Runs body(target) once per SIMD target this machine supports, with dispatch forced to that
 /// target, and restores the default afterwards.
 inline void for_each_simd_target(const std::function<void(const std::string&)>& body) {
+  // Restored on the way out, a throw included: one executable runs a module's tests.
+  struct Restore {
+    ~Restore() { force_simd_target(""); }
+  } restore;
   for (const std::string& target : available_simd_targets()) {
     force_simd_target(target);
     SCOPED_TRACE("SIMD target " + target);
     body(target);
   }
-  force_simd_target("");
 }
 
 /// Random particles and constraint index tuples of N particles each, such that no movable

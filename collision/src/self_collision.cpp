@@ -399,10 +399,11 @@ EdgeBatch& edge_batch() {
   return batch;
 }
 
-/// The candidate lists' order: by first, then by second; within one first, by second.
+/// The candidate lists' order: by first, then by second.
 constexpr auto by_pair = [](const auto& l, const auto& r) {
   return l.first != r.first ? l.first < r.first : l.second < r.second;
 };
+/// by_pair within one run of the same first.
 constexpr auto by_second = [](const auto& l, const auto& r) { return l.second < r.second; };
 
 template <class Body>

@@ -87,10 +87,10 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
                       "default) or separate (an array per coordinate); the same results");
   command->add_option("--sweep-order", options.sweep_order,
                       "modes gs and hybrid: colour-major (colour after colour, default) or "
-                      "part-major (each METIS part's colours on one worker while its particles "
-                      "stay in cache, the parts in parallel; needs --strategy metis)");
+                      "part-major (each part's colours on one worker while its particles stay in "
+                      "cache, the parts in parallel; needs --strategy metis or blocks)");
   command->add_option("--particles-per-part", options.particles_per_part,
-                      "strategy metis: movable particles per part (default 65536)")
+                      "strategies metis and blocks: movable particles per part (default 65536)")
       ->check(CLI::PositiveNumber);
   command->add_option("--divergence-rms", options.divergence_rms,
                       "a step that ends with an RMS residual above this fails (default 10; inf "
@@ -147,9 +147,10 @@ int run_command(const RunOptions& options) {
   if (options.particle_layout)
     settings.particle_layout = parse_particle_layout(*options.particle_layout);
   if (options.sweep_order) settings.sweep_order = parse_sweep_order(*options.sweep_order);
-  if (options.particles_per_part && simulation.strategy != "metis")
+  if (options.particles_per_part && simulation.strategy != "metis" &&
+      simulation.strategy != "blocks")
     throw InvalidInput("--particles-per-part: strategy " + simulation.strategy +
-                       " has no parts (strategy metis has)");
+                       " has no parts (strategies metis and blocks have)");
   const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   const ColouringStrategy& strategy = registry.get(simulation.strategy);
 

@@ -202,14 +202,14 @@ void register_all() {
   for (const std::string& scene : kStartupScenes) {
     benchmark::RegisterBenchmark(("startup/graph/" + scene).c_str(), startup_benchmark, std::string(), scene)
         ->Unit(benchmark::kMillisecond)->UseRealTime();
-    for (const char* strategy : {"greedy", "stencil"})
+    for (const char* strategy : {"greedy", "stencil", "blocks"})
       benchmark::RegisterBenchmark(("startup/graph+" + std::string(strategy) + "/" + scene).c_str(),
                                    startup_benchmark, std::string(strategy), scene)
           ->Unit(benchmark::kMillisecond)->UseRealTime();
   }
   const std::vector<std::string> strategies = {"greedy",  "largest-first",   "smallest-last",
                                                "dsatur",  "stencil",         "iterated-greedy",
-                                               "random",  "metis"};
+                                               "random",  "metis",           "blocks"};
   for (const std::string& m : kMeshes) {
     benchmark::RegisterBenchmark(("graph/build/" + m).c_str(), graph_build_benchmark, m, false)
         ->Unit(benchmark::kMillisecond)->UseRealTime();

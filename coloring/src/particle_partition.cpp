@@ -1,4 +1,5 @@
-// METIS k-way partitioning of the particle graph.
+// METIS k-way partitioning of the particle graph, and the partitioner-free split into runs
+// of the numbering (partition_particles_in_blocks).
 //
 // The particle graph is built in METIS's CSR form (xadj/adjncy over the movable particles,
 // renumbered densely): two passes over particles, each collecting the neighbours through the
@@ -114,6 +115,19 @@ ParticlePartition partition_particles(const ConstraintGraph& graph, std::size_t 
   partition.part_count = part_count;
   for (std::size_t i = 0; i < n; ++i)
     partition.part_of_particle[movable[i]] = static_cast<std::uint32_t>(part[i]);
+  return partition;
+}
+
+ParticlePartition partition_particles_in_blocks(const ConstraintGraph& graph,
+                                                std::size_t part_count) {
+  ParticlePartition partition;
+  partition.part_of_particle.assign(graph.particle_count(), ParticlePartition::kNoPart);
+  std::vector<ParticleIndex> movable;
+  movable.reserve(graph.movable_particle_count());
+  for (std::size_t p = 0; p < graph.particle_count(); ++p)
+    if (graph.is_movable(static_cast<ParticleIndex>(p))) movable.push_back(static_cast<ParticleIndex>(p));
+  if (movable.empty()) return partition;
+  contiguous_blocks(partition, movable, std::clamp<std::size_t>(part_count, 1, movable.size()));
   return partition;
 }
 

@@ -17,6 +17,7 @@ ColouringRegistry ColouringRegistry::with_builtin_strategies() {
   registry.add(make_iterated_greedy_strategy());
   registry.add(make_random_strategy());
   registry.add(make_metis_strategy());
+  registry.add(make_blocks_strategy());
   return registry;
 }
 

@@ -45,7 +45,9 @@ def plot(results, out):
     import matplotlib.pyplot as plt
 
     strategies = list(tessera.strategies())
-    markers = dict(zip(strategies, "osD^vP*X"))
+    # One marker per strategy, cycling if a user registered more than there are markers.
+    shapes = "osD^vP*Xhp<>"
+    markers = {name: shapes[k % len(shapes)] for k, name in enumerate(strategies)}
     fig, axes = plt.subplots(len(results), 3, figsize=(13, 3.4 * len(results)), squeeze=False)
     for row, (scene, rows) in enumerate(results.items()):
         for name, r in rows.items():

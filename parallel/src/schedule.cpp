@@ -94,7 +94,7 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
                        " constraints, the model has " + std::to_string(constraint_count()));
   if (options_.sweep_order == SweepOrder::part_major && !colouring->has_parts())
     throw InvalidInput("schedule: sweep order part-major needs a colouring with parts "
-                       "(strategy metis)");
+                       "(strategy metis or blocks)");
   const std::size_t particle_count = model.particles.size();
   take_particle_order(*colouring, particle_count);
 

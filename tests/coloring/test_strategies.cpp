@@ -108,7 +108,8 @@ TEST_P(EveryStrategy, SameColouringForOneAndTwoThreadsAndRepeatedRuns) {
 
 INSTANTIATE_TEST_SUITE_P(Coloring, EveryStrategy,
                          ::testing::Values("greedy", "largest-first", "smallest-last", "dsatur",
-                                           "stencil", "iterated-greedy", "random", "metis"),
+                                           "stencil", "iterated-greedy", "random", "metis",
+                                           "blocks"),
                          [](const auto& parameter) {
                            std::string name = parameter.param;
                            std::replace(name.begin(), name.end(), '-', '_');
@@ -291,17 +292,69 @@ TEST(MetisStrategy, RenumbersParticlesPartByPartAndListsColoursByPart) {
 }
 
 TEST(MetisStrategy, DefaultPartSizeIsTheMeasuredConstant) {
-  // 90,000 movable particles: more than one part of the default size.
+  // 90,000 movable particles: more than one part of the default size (both part strategies).
   const ConstraintGraph graph = test::cloth_graph(300, 300, false);
   ASSERT_GT(graph.movable_particle_count(), kDefaultParticlesPerPart);
   ColouringOptions by_default, explicit_size;
   explicit_size.particles_per_part = kDefaultParticlesPerPart;
-  const Colouring a = registry().get("metis").colour(graph, by_default);
-  const Colouring b = registry().get("metis").colour(graph, explicit_size);
-  EXPECT_TRUE(validate(graph, a).valid);
-  EXPECT_TRUE(std::equal(a.colours().begin(), a.colours().end(), b.colours().begin()));
-  EXPECT_TRUE(std::equal(a.particle_new_to_old().begin(), a.particle_new_to_old().end(),
-                         b.particle_new_to_old().begin()));
+  for (const char* strategy : {"metis", "blocks"}) {
+    const Colouring a = registry().get(strategy).colour(graph, by_default);
+    const Colouring b = registry().get(strategy).colour(graph, explicit_size);
+    EXPECT_TRUE(validate(graph, a).valid) << strategy;
+    EXPECT_EQ(a.part_count(), 2u) << strategy;
+    EXPECT_TRUE(std::equal(a.colours().begin(), a.colours().end(), b.colours().begin()))
+        << strategy;
+    EXPECT_TRUE(std::equal(a.particle_new_to_old().begin(), a.particle_new_to_old().end(),
+                           b.particle_new_to_old().begin()))
+        << strategy;
+  }
+}
+
+TEST(BlocksStrategy, PartsAreRunsOfTheNumberingStaticParticlesLast) {
+  // A 40 × 40 cloth with its first row (particles 0–39) pinned: 1,560 movable particles in
+  // parts of 200 at most are 8 runs of consecutive indices, renumbered part by part in
+  // their own order, the static particles after them.
+  const io::ClothGrid cloth = io::make_cloth_grid(40, 40);
+  std::vector<Real> inverse_masses(cloth.vertex_count(), Real(1));
+  for (std::size_t i = 0; i < 40; ++i) inverse_masses[i] = 0;
+  const std::vector<ConstraintGroup> groups = {
+      ConstraintGroup::fixed_arity("distance", 2, cloth.edge_indices),
+      ConstraintGroup::fixed_arity("bending", 4, cloth.bending_indices)};
+  const ConstraintGraph graph(inverse_masses, groups);
+  ColouringOptions options;
+  options.particles_per_part = 200;
+  const Colouring colouring = registry().get("blocks").colour(graph, options);
+  EXPECT_TRUE(validate(graph, colouring).valid);
+  ASSERT_TRUE(colouring.has_parts());
+  ASSERT_EQ(colouring.part_count(), 8u);
+  // New numbers: the movable particles 40, 41, … first and in order, then 0–39.
+  for (std::size_t p = 0; p < graph.particle_count(); ++p)
+    EXPECT_EQ(colouring.particle_old_to_new()[p], p < 40 ? 1560 + p : p - 40) << "particle " << p;
+  // Each interior constraint's part: the same for all its particles, never decreasing along
+  // the numbering, and no part with more than 195 particles (1,560 / 8).
+  std::vector<std::uint32_t> part_of_particle(graph.particle_count(), ~std::uint32_t(0));
+  std::size_t interior = 0;
+  for (std::size_t c = 0; c < graph.constraint_count(); ++c) {
+    const std::uint32_t part = colouring.part_of_constraint()[c];
+    if (part == colouring.part_count()) continue;
+    ++interior;
+    for (ParticleIndex p : graph.particles_of(static_cast<ConstraintIndex>(c))) {
+      EXPECT_TRUE(part_of_particle[p] == ~std::uint32_t(0) || part_of_particle[p] == part)
+          << "particle " << p << " in two parts";
+      part_of_particle[p] = part;
+    }
+  }
+  std::vector<std::size_t> sizes(colouring.part_count(), 0);
+  std::uint32_t last = 0;
+  for (std::size_t p = 40; p < graph.particle_count(); ++p) {
+    if (part_of_particle[p] == ~std::uint32_t(0)) continue;  // only in crossing constraints
+    EXPECT_GE(part_of_particle[p], last) << "particle " << p;
+    last = part_of_particle[p];
+    ++sizes[last];
+  }
+  for (const std::size_t size : sizes) EXPECT_LE(size, 195u);
+  // Runs of 195 particles are about 5 rows of the cloth: most constraints are inside one.
+  EXPECT_GT(interior, graph.constraint_count() / 2);
 }
 
 TEST(Balance, EvensOutColourSizesWithoutAddingColours) {
@@ -448,7 +501,7 @@ TEST(Registry, ListsBuiltinsFindsByNameAndTakesUserStrategies) {
   ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   const std::vector<std::string_view> names = registry.names();
   for (const char* expected : {"greedy", "largest-first", "smallest-last", "dsatur", "stencil",
-                               "iterated-greedy", "random", "metis"})
+                               "iterated-greedy", "random", "metis", "blocks"})
     EXPECT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
   EXPECT_THROW(registry.get("no-such-strategy"), InvalidInput);
   EXPECT_THROW(registry.add(make_greedy_strategy()), InvalidInput);

@@ -1,4 +1,4 @@
-// SweepOrder::part_major: each METIS part's interior constraints colour after colour on one
+// SweepOrder::part_major: each part's interior constraints colour after colour on one
 // worker, the parts in parallel, then the crossing constraints' colour phases. Checked: it
 // projects every constraint once per iteration (with one part it is colour-major's sweep,
 // bit for bit), any thread count gives the same bits, it converges like colour-major, and the
@@ -28,10 +28,11 @@ SolverSettings settings_with(SweepOrder order, std::size_t threads) {
   return settings;
 }
 
-Colouring metis_colouring(const Model& model, std::size_t particles_per_part) {
+Colouring part_colouring(const Model& model, std::size_t particles_per_part,
+                          const char* strategy = "metis") {
   ColouringOptions options;
   options.particles_per_part = particles_per_part;
-  return test::colour_model(model, "metis", options);
+  return test::colour_model(model, strategy, options);
 }
 
 std::vector<Vector3r> after_steps(const Model& model, const Colouring& colouring,
@@ -45,7 +46,7 @@ TEST(SweepOrder, WithOnePartItIsTheColourMajorSweepBitForBit) {
   // One part: every constraint is interior, so part-major sweeps the same colours in the same
   // order on one worker; a constraint skipped or projected twice would change the bits.
   const Model cloth = test::cloth_model(24, 20);
-  const Colouring colouring = metis_colouring(cloth, 1 << 20);
+  const Colouring colouring = part_colouring(cloth, 1 << 20);
   ASSERT_TRUE(colouring.has_parts());
   ASSERT_EQ(colouring.part_count(), 1u);
   const auto colour_major = after_steps(cloth, colouring, settings_with(SweepOrder::colour_major, 2), 3);
@@ -56,23 +57,26 @@ TEST(SweepOrder, WithOnePartItIsTheColourMajorSweepBitForBit) {
 TEST(SweepOrder, PartMajorGivesTheSameBitsForAnyThreadCount) {
   const Model cloth = test::cloth_model(40, 32);
   const Model bar = test::tet_bar_model(4, 4, 16, test::BarMaterial::fem_tetra, Real(1e6));
-  for (const Model* model : {&cloth, &bar}) {
-    const Colouring colouring = metis_colouring(*model, 128);
-    ASSERT_GE(colouring.part_count(), 4u);
-    const auto one = after_steps(*model, colouring, settings_with(SweepOrder::part_major, 1), 4);
-    for (const std::size_t threads : {2u, 3u, 7u})
-      EXPECT_TRUE(test::same_bits(
-          one, after_steps(*model, colouring, settings_with(SweepOrder::part_major, threads), 4)))
-          << threads << " threads";
-    // A different Gauss–Seidel order from colour-major: other bits (so the option acts).
-    EXPECT_FALSE(test::same_bits(
-        one, after_steps(*model, colouring, settings_with(SweepOrder::colour_major, 1), 4)));
-  }
+  // Both part strategies: METIS parts, and runs of the numbering.
+  for (const char* strategy : {"metis", "blocks"})
+    for (const Model* model : {&cloth, &bar}) {
+      const Colouring colouring = part_colouring(*model, 128, strategy);
+      ASSERT_GE(colouring.part_count(), 4u) << strategy;
+      const auto one = after_steps(*model, colouring, settings_with(SweepOrder::part_major, 1), 4);
+      for (const std::size_t threads : {2u, 3u, 7u})
+        EXPECT_TRUE(test::same_bits(
+            one, after_steps(*model, colouring, settings_with(SweepOrder::part_major, threads), 4)))
+            << strategy << ", " << threads << " threads";
+      // A different Gauss–Seidel order from colour-major: other bits (so the option acts).
+      EXPECT_FALSE(test::same_bits(
+          one, after_steps(*model, colouring, settings_with(SweepOrder::colour_major, 1), 4)))
+          << strategy;
+    }
 }
 
 TEST(SweepOrder, EveryConstraintIsInAPartOrAPhaseAndTheStatisticsSaySo) {
   const Model cloth = test::cloth_model(40, 32);
-  const Colouring colouring = metis_colouring(cloth, 128);
+  const Colouring colouring = part_colouring(cloth, 128);
   Solver solver(cloth, colouring, settings_with(SweepOrder::part_major, 2));
   const SolverStatistics& statistics = solver.statistics();
   EXPECT_EQ(statistics.part_count, colouring.part_count());
@@ -90,7 +94,7 @@ TEST(SweepOrder, PartMajorConvergesLikeColourMajor) {
   // The same cloth swinging for 20 steps: the two orders of the same sweep leave residuals
   // within 10 % of each other and end within 1 % of the cloth's size of each other.
   const Model cloth = test::cloth_model(48, 48);
-  const Colouring colouring = metis_colouring(cloth, 256);
+  const Colouring colouring = part_colouring(cloth, 256);
   double rms[2] = {};
   std::vector<Vector3r> end[2];
   for (const SweepOrder order : {SweepOrder::colour_major, SweepOrder::part_major}) {
@@ -114,7 +118,7 @@ TEST(SweepOrder, PartMajorConvergesLikeColourMajor) {
 
 TEST(SweepOrder, StaticParticlesStayPutAndHybridRunsTheSmallCrossingColoursAsJacobi) {
   const Model cloth = test::cloth_model(32, 24);  // pinned at two corners
-  const Colouring colouring = metis_colouring(cloth, 96);
+  const Colouring colouring = part_colouring(cloth, 96);
   SolverSettings settings = settings_with(SweepOrder::part_major, 2);
   settings.mode = SolverMode::hybrid;
   settings.hybrid_threshold = 64;
@@ -144,7 +148,7 @@ TEST(SweepOrder, WrongUseIsAClearError) {
   expect_error([&] { Solver(cloth, test::colour_model(cloth, "greedy"), settings_with(SweepOrder::part_major, 1)); },
                "needs a colouring with parts");
   // A mode without colour phases.
-  const Colouring metis = metis_colouring(cloth, 64);
+  const Colouring metis = part_colouring(cloth, 64);
   SolverSettings jacobi = settings_with(SweepOrder::part_major, 1);
   jacobi.mode = SolverMode::jacobi;
   expect_error([&] { Solver(cloth, metis, jacobi); }, "needs mode gs or hybrid");

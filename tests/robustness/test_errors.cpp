@@ -236,7 +236,7 @@ TEST(ErrorCatalogue, UnknownStrategyName) {
   const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   EXPECT_EQ(invalid_input([&] { registry.get("fastest"); }),
             "unknown colouring strategy 'fastest' (known: greedy, largest-first, smallest-last, "
-            "dsatur, stencil, iterated-greedy, random, metis)");
+            "dsatur, stencil, iterated-greedy, random, metis, blocks)");
 }
 
 TEST(ErrorCatalogue, UnknownModeName) {

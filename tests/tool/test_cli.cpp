@@ -142,6 +142,19 @@ TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountAndNeedsParts) {
                                       "--particles-per-part", "200"});
   EXPECT_EQ(colour_major["sweep_order"], "colour-major") << "the default";
   EXPECT_NE(colour_major["state_hash"], a["state_hash"]) << "another Gauss-Seidel order";
+  // Parts from runs of the numbering (strategy blocks): the same for any thread count, and
+  // other parts than METIS's, so other bits.
+  std::vector<std::string> blocks = {"run", "cloth:40", "--frames", "3",
+                                     "--strategy", "blocks", "--particles-per-part",
+                                     "200", "--sweep-order", "part-major"};
+  auto blocks_two = blocks;
+  blocks.insert(blocks.end(), {"--threads", "1"});
+  blocks_two.insert(blocks_two.end(), {"--threads", "2"});
+  const Json c = run_json(blocks), d = run_json(blocks_two);
+  EXPECT_EQ(c["strategy"], "blocks");
+  EXPECT_EQ(c["parts"].get<int>(), 8) << "1,598 movable particles in parts of 200 at most";
+  EXPECT_EQ(c["state_hash"], d["state_hash"]);
+  EXPECT_NE(c["state_hash"], a["state_hash"]);
   const auto expect_clear_error = [&](const std::vector<std::string>& args, const char* words) {
     const Outcome bad = run(args);
     EXPECT_EQ(bad.exit_code, 2) << bad.err;
@@ -438,7 +451,7 @@ TEST_F(Cli, ColorComparesEveryStrategyTheSameForAnyThreadCount) {
   const Json one = run_json({"color", "cloth:24x20", "--threads", "1"});
   const Json two = run_json({"color", "cloth:24x20", "--threads", "2"});
   ASSERT_TRUE(one.is_array());
-  ASSERT_EQ(one.size(), 8u);
+  ASSERT_EQ(one.size(), 9u);  // every built-in strategy
   ASSERT_EQ(two.size(), one.size());
   for (std::size_t i = 0; i < one.size(); ++i) {
     for (const char* key : {"strategy", "colours", "lower_bound", "largest", "smallest",
@@ -472,7 +485,8 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
   write("collider_bad.json",
         R"({"generator": "cloth:8", "colliders": [{"shape": "sphere", "centre": [0, 0, 0], "radius": -1}]})");
   const std::string strategies =
-      "(known: greedy, largest-first, smallest-last, dsatur, stencil, iterated-greedy, random, metis)";
+      "(known: greedy, largest-first, smallest-last, dsatur, stencil, iterated-greedy, random, "
+      "metis, blocks)";
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{}, "tessera: a subcommand is needed: run, color or info (see tessera --help)"},
       {{"bogus"}, "tessera: unknown subcommand 'bogus' (known: run, color, info)"},

@@ -19,7 +19,7 @@ struct ColouringOptions {
   /// Seed of the randomised strategies (random priorities, METIS). Same seed, same colouring,
   /// for any thread count.
   std::uint64_t seed = 1;
-  /// metis: movable particles per part; 0 takes kDefaultParticlesPerPart (particle_partition.hpp,
+  /// metis, blocks: movable particles per part; 0 takes kDefaultParticlesPerPart (particle_partition.hpp,
   /// which records the measurement behind it).
   std::size_t particles_per_part = 0;
   /// Rounds of iterated greedy (Culberson) in the reduction pass; each round recolours the
@@ -54,7 +54,7 @@ class ColouringRegistry {
   /// An empty registry.
   ColouringRegistry() = default;
   /// A registry holding Tessera's built-in strategies: greedy, largest-first, smallest-last,
-  /// dsatur, stencil, iterated-greedy, random, metis.
+  /// dsatur, stencil, iterated-greedy, random, metis, blocks.
   static ColouringRegistry with_builtin_strategies();
 
   /// Adds a strategy; throws tessera::InvalidInput if the name is empty or already taken.
@@ -79,5 +79,6 @@ std::shared_ptr<const ColouringStrategy> make_stencil_strategy();
 std::shared_ptr<const ColouringStrategy> make_iterated_greedy_strategy();
 std::shared_ptr<const ColouringStrategy> make_random_strategy();
 std::shared_ptr<const ColouringStrategy> make_metis_strategy();
+std::shared_ptr<const ColouringStrategy> make_blocks_strategy();
 
 }  // namespace tessera

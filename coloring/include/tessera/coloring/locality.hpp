@@ -28,7 +28,7 @@ std::vector<ParticleIndex> reverse_cuthill_mckee_order(const ConstraintGraph& gr
 /// A copy of `colouring` with the same colours, in which particles are renumbered by reverse
 /// Cuthill–McKee and each colour lists its constraints by increasing smallest renumbered
 /// movable particle (ties keep the previous order). A colouring that already renumbers
-/// particles (metis) comes back unchanged: its strategy ordered its colours for its own
+/// particles (metis, blocks) comes back unchanged: its strategy ordered its colours for its own
 /// numbering (parts, then crossing constraints), which sorting would undo.
 Colouring improve_locality(const ConstraintGraph& graph, const Colouring& colouring);
 

@@ -1,6 +1,6 @@
 // Partitioning the movable particles into parts of about a core's cache worth (METIS k-way on
-// the particle graph: particles adjacent when a constraint joins them). Used by the metis
-// strategy and by the locality reordering.
+// the particle graph: particles adjacent when a constraint joins them; or runs of the
+// particles' own numbering). Used by the part strategies (metis, blocks).
 #pragma once
 
 #include <cstddef>
@@ -19,15 +19,16 @@ struct ParticlePartition {
   std::vector<std::uint32_t> part_of_particle;
 };
 
-/// The metis strategy's default part size, in movable particles. Chosen by measurement
-/// (bench_coloring, coloring/metis/<mesh>/particles_per_part:<k>, 1024² cloth with bending
-/// and a 2.2 M-constraint tet bar): parts of 1,024 / 4,096 / 16,384 / 65,536 particles gave
-/// 23 / 24 / 23 / 23 colours on the cloth and 48 / 47 / 47 / 46 on the tet bar, a mean
-/// particle-id spread per 16 constraints of a colour of 38,143 / 23,785 / 9,836 / 4,851 and
-/// 24,839 / 14,725 / 7,820 / 3,340, and colouring times of 2.1 / 1.3 / 1.1 / 1.2 s and
-/// 0.56 / 0.35 / 0.32 / 0.30 s. Larger parts are better on every measure; 65,536 still gives
-/// 16 parts per million particles to colour in parallel. Fixed, not machine-dependent, so
-/// the colouring is the same on every machine.
+/// The part strategies' default part size (metis and blocks), in movable particles. Chosen for
+/// metis by measurement (bench_coloring, coloring/metis/<mesh>/particles_per_part:<k>, 1024² cloth
+/// with bending and a 2.2 M-constraint tet bar): parts of 1,024 / 4,096 / 16,384 / 65,536 particles
+/// gave 23 / 24 / 23 / 23 colours on the cloth and 48 / 47 / 47 / 46 on the tet bar, a mean
+/// particle-id spread per 16 constraints of a colour of 38,143 / 23,785 / 9,836 / 4,851 and 24,839
+/// / 14,725 / 7,820 / 3,340, and colouring times of 2.1 / 1.3 / 1.1 / 1.2 s and 0.56 / 0.35 / 0.32
+/// / 0.30 s. Larger parts are better on every measure; 65,536 still gives 16 parts per million
+/// particles to colour in parallel. Fixed, not machine-dependent, so the colouring is the same on
+/// every machine. Blocks' sweeps on the 1024² cloth measured best at it too (docs/performance.md,
+/// "Parts without METIS").
 inline constexpr std::size_t kDefaultParticlesPerPart = 65536;
 
 /// Splits the movable particles into `part_count` parts with METIS_PartGraphKway (seeded with
@@ -35,5 +36,11 @@ inline constexpr std::size_t kDefaultParticlesPerPart = 65536;
 /// fewer movable particles than parts, and graphs without edges, by contiguous blocks.
 ParticlePartition partition_particles(const ConstraintGraph& graph, std::size_t part_count,
                                       std::uint64_t seed);
+
+/// Splits the movable particles, in index order, into `part_count` runs of consecutive
+/// indices (sizes differing by at most one; fewer parts when there are fewer movable
+/// particles): linear, no partitioner. The parts are as compact as the numbering is.
+ParticlePartition partition_particles_in_blocks(const ConstraintGraph& graph,
+                                                std::size_t part_count);
 
 }  // namespace tessera

@@ -171,7 +171,7 @@ struct SolverSettings {
   /// How the sweeps hold the particles (solver_mode.hpp); the same bits either way.
   ParticleLayout particle_layout = kDefaultParticleLayout;
   /// Modes gs and hybrid: colour after colour, or part after part (solver_mode.hpp; needs a
-  /// colouring with parts, strategy metis).
+  /// colouring with parts, strategy metis or blocks).
   SweepOrder sweep_order = SweepOrder::colour_major;
   /// Consecutive coloured phases run in one parallel region per iteration, the threads
   /// meeting at a spin barrier between colours (parallel/src/phase_region.hpp); with coloured

@@ -1,6 +1,10 @@
-// The metis strategy: partition particles into parts of kDefaultParticlesPerPart (measured; see
-// particle_partition.hpp), colour the constraints that cross parts, then each part's interior
-// constraints in parallel with the same palette, and renumber particles part by part.
+// The part strategies, metis and blocks: partition the movable particles into parts, colour
+// the constraints that cross parts, then each part's interior constraints in parallel with
+// the same palette, and renumber particles part by part. They differ only in the partition:
+// METIS k-way on the particle graph (metis), or contiguous runs of the particles' own
+// numbering (blocks: no graph partitioner, for meshes numbered with locality, such as the
+// generators' grids and most meshers' output; a scrambled numbering gives parts that
+// cross everywhere, and a colouring that is still valid but mostly crossing constraints).
 //
 // Why it is race-free: a part's interior constraints touch only that part's particles, so the
 // per-particle colour sets written by one part's worker are never read or written by another;
@@ -32,13 +36,16 @@
 namespace tessera {
 namespace {
 
-class MetisStrategy final : public ColouringStrategy {
+/// How a part strategy splits the movable particles into `parts` parts.
+using Partitioner = ParticlePartition (*)(const ConstraintGraph& graph, std::size_t parts,
+                                         std::uint64_t seed);
+
+class PartStrategy final : public ColouringStrategy {
  public:
-  std::string_view name() const override { return "metis"; }
-  std::string_view description() const override {
-    return "METIS parts of 65,536 particles (measured), crossing constraints coloured first, "
-           "then the parts in parallel; particles renumbered by part";
-  }
+  PartStrategy(std::string_view name, std::string_view description, Partitioner partitioner)
+      : name_(name), description_(description), partitioner_(partitioner) {}
+  std::string_view name() const override { return name_; }
+  std::string_view description() const override { return description_; }
 
   Colouring colour(const ConstraintGraph& graph, const ColouringOptions& options) const override {
     const std::size_t count = graph.constraint_count();
@@ -47,7 +54,7 @@ class MetisStrategy final : public ColouringStrategy {
                                      : kDefaultParticlesPerPart;
     const std::size_t movable = graph.movable_particle_count();
     const ParticlePartition partition =
-        partition_particles(graph, (movable + per_part - 1) / std::max<std::size_t>(per_part, 1), options.seed);
+        partitioner_(graph, (movable + per_part - 1) / std::max<std::size_t>(per_part, 1), options.seed);
     const std::size_t parts = partition.part_count;
 
     // Part of each constraint: its particles' common part, or `parts` (crossing, or touching
@@ -137,12 +144,30 @@ class MetisStrategy final : public ColouringStrategy {
     colouring.set_parts(std::move(part_of_constraint), parts);
     return colouring;
   }
+
+ private:
+  std::string_view name_, description_;
+  Partitioner partitioner_;
 };
 
 }  // namespace
 
 std::shared_ptr<const ColouringStrategy> make_metis_strategy() {
-  return std::make_shared<MetisStrategy>();
+  return std::make_shared<PartStrategy>(
+      "metis",
+      "METIS parts of 65,536 particles (measured), crossing constraints coloured first, then "
+      "the parts in parallel; particles renumbered by part",
+      &partition_particles);
+}
+
+std::shared_ptr<const ColouringStrategy> make_blocks_strategy() {
+  return std::make_shared<PartStrategy>(
+      "blocks",
+      "parts of 65,536 consecutively numbered particles (no partitioner: for meshes numbered "
+      "with locality), then as metis",
+      [](const ConstraintGraph& graph, std::size_t parts, std::uint64_t) {
+        return partition_particles_in_blocks(graph, parts);
+      });
 }
 
 }  // namespace tessera

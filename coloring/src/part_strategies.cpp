@@ -53,8 +53,8 @@ class PartStrategy final : public ColouringStrategy {
                                      ? options.particles_per_part
                                      : kDefaultParticlesPerPart;
     const std::size_t movable = graph.movable_particle_count();
-    const ParticlePartition partition =
-        partitioner_(graph, (movable + per_part - 1) / std::max<std::size_t>(per_part, 1), options.seed);
+    const std::size_t parts_asked = (movable + per_part - 1) / std::max<std::size_t>(per_part, 1);
+    const ParticlePartition partition = partitioner_(graph, parts_asked, options.seed);
     const std::size_t parts = partition.part_count;
 
     // Part of each constraint: its particles' common part, or `parts` (crossing, or touching

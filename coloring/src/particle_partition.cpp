@@ -125,7 +125,8 @@ ParticlePartition partition_particles_in_blocks(const ConstraintGraph& graph,
   std::vector<ParticleIndex> movable;
   movable.reserve(graph.movable_particle_count());
   for (std::size_t p = 0; p < graph.particle_count(); ++p)
-    if (graph.is_movable(static_cast<ParticleIndex>(p))) movable.push_back(static_cast<ParticleIndex>(p));
+    if (graph.is_movable(static_cast<ParticleIndex>(p)))
+      movable.push_back(static_cast<ParticleIndex>(p));
   if (movable.empty()) return partition;
   contiguous_blocks(partition, movable, std::clamp<std::size_t>(part_count, 1, movable.size()));
   return partition;

@@ -55,9 +55,9 @@ class Colouring {
   /// tessera::InvalidInput otherwise).
   void set_particle_order(std::vector<ParticleIndex> new_to_old);
 
-  /// Parts (strategies metis and blocks; none for the others): a part's interior constraints touch no
-  /// movable particle outside the part, so different parts can be swept at the same time
-  /// while each sweeps its own colours one after another (SweepOrder::part_major);
+  /// Parts (strategies metis and blocks; none for the others): a part's interior constraints touch
+  /// no movable particle outside the part, so different parts can be swept at the same time while
+  /// each sweeps its own colours one after another (SweepOrder::part_major);
   /// part_of_constraint()[c] is c's part, or part_count() for a crossing constraint (touching
   /// several parts, or no movable particle). The schedule checks the claim against the model.
   bool has_parts() const { return has_parts_; }

@@ -19,8 +19,8 @@ struct ColouringOptions {
   /// Seed of the randomised strategies (random priorities, METIS). Same seed, same colouring,
   /// for any thread count.
   std::uint64_t seed = 1;
-  /// metis, blocks: movable particles per part; 0 takes kDefaultParticlesPerPart (particle_partition.hpp,
-  /// which records the measurement behind it).
+  /// metis, blocks: movable particles per part; 0 takes kDefaultParticlesPerPart
+  /// (particle_partition.hpp, which records the measurement behind it).
   std::size_t particles_per_part = 0;
   /// Rounds of iterated greedy (Culberson) in the reduction pass; each round recolours the
   /// constraints first-fit, colour class by colour class, which never adds a colour.

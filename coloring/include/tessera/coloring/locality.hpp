@@ -26,10 +26,10 @@ namespace tessera {
 std::vector<ParticleIndex> reverse_cuthill_mckee_order(const ConstraintGraph& graph);
 
 /// A copy of `colouring` with the same colours, in which particles are renumbered by reverse
-/// Cuthill–McKee and each colour lists its constraints by increasing smallest renumbered
-/// movable particle (ties keep the previous order). A colouring that already renumbers
-/// particles (metis, blocks) comes back unchanged: its strategy ordered its colours for its own
-/// numbering (parts, then crossing constraints), which sorting would undo.
+/// Cuthill–McKee and each colour lists its constraints by increasing smallest renumbered movable
+/// particle (ties keep the previous order). A colouring that already renumbers particles (metis,
+/// blocks) comes back unchanged: its strategy ordered its colours for its own numbering (parts,
+/// then crossing constraints), which sorting would undo.
 Colouring improve_locality(const ConstraintGraph& graph, const Colouring& colouring);
 
 /// Mean over colours and over windows of `window` consecutive constraints of a colour of the

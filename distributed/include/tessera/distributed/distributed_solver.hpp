@@ -64,12 +64,12 @@ struct DistributedStatistics {
 
 class DistributedSolver {
  public:
-  /// Collective over `communicator`. settings.mode must be gs (exact mode follows the
-  /// colours); the colouring must colour constraint_graph(model). Its particle renumbering,
-  /// if any (metis, blocks, the locality pass), is one process's memory layout and is not used: each
-  /// rank numbers what it holds in ascending global order, and no constraint's arithmetic
-  /// depends on the numbering. Throws InvalidInput otherwise, or for what Solver refuses. settings.check_finite and the
-  /// divergence bound are applied collectively after each step (step() throws
+  /// Collective over `communicator`. settings.mode must be gs (exact mode follows the colours); the
+  /// colouring must colour constraint_graph(model). Its particle renumbering, if any (metis,
+  /// blocks, the locality pass), is one process's memory layout and is not used: each rank numbers
+  /// what it holds in ascending global order, and no constraint's arithmetic depends on the
+  /// numbering. Throws InvalidInput otherwise, or for what Solver refuses. settings.check_finite
+  /// and the divergence bound are applied collectively after each step (step() throws
   /// NumericalFailure on every rank when any rank has a non-finite position).
   DistributedSolver(const Model& model, const Colouring& colouring, SolverSettings settings,
                     MPI_Comm communicator, DistributedMode mode = DistributedMode::exact);

@@ -147,12 +147,16 @@ int run_command(const RunOptions& options) {
   if (options.particle_layout)
     settings.particle_layout = parse_particle_layout(*options.particle_layout);
   if (options.sweep_order) settings.sweep_order = parse_sweep_order(*options.sweep_order);
-  if (options.particles_per_part && simulation.strategy != "metis" &&
-      simulation.strategy != "blocks")
-    throw InvalidInput("--particles-per-part: strategy " + simulation.strategy +
-                       " has no parts (strategies metis and blocks have)");
   const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   const ColouringStrategy& strategy = registry.get(simulation.strategy);
+  if (options.particles_per_part && !strategy.makes_parts()) {
+    std::string with_parts;
+    for (const std::string_view name : registry.names())
+      if (registry.get(name).makes_parts())
+        with_parts += (with_parts.empty() ? "" : " and ") + std::string(name);
+    throw InvalidInput("--particles-per-part: strategy " + simulation.strategy +
+                       " has no parts (strategies " + with_parts + " have)");
+  }
 
   io::Scene scene = io::build_scene(description);
   const std::size_t constraints = scene.model.constraints.size();

@@ -46,6 +46,7 @@ class PartStrategy final : public ColouringStrategy {
       : name_(name), description_(description), partitioner_(partitioner) {}
   std::string_view name() const override { return name_; }
   std::string_view description() const override { return description_; }
+  bool makes_parts() const override { return true; }
 
   Colouring colour(const ConstraintGraph& graph, const ColouringOptions& options) const override {
     const std::size_t count = graph.constraint_count();

@@ -27,6 +27,16 @@
 namespace tessera {
 namespace {
 
+/// The movable particles, by increasing index.
+std::vector<ParticleIndex> movable_particles(const ConstraintGraph& graph) {
+  std::vector<ParticleIndex> movable;
+  movable.reserve(graph.movable_particle_count());
+  for (std::size_t p = 0; p < graph.particle_count(); ++p)
+    if (graph.is_movable(static_cast<ParticleIndex>(p)))
+      movable.push_back(static_cast<ParticleIndex>(p));
+  return movable;
+}
+
 void contiguous_blocks(ParticlePartition& partition, const std::vector<ParticleIndex>& movable,
                        std::size_t part_count) {
   partition.part_count = part_count;
@@ -40,14 +50,9 @@ ParticlePartition partition_particles(const ConstraintGraph& graph, std::size_t 
                                       std::uint64_t seed) {
   ParticlePartition partition;
   partition.part_of_particle.assign(graph.particle_count(), ParticlePartition::kNoPart);
-  std::vector<ParticleIndex> movable;
-  movable.reserve(graph.movable_particle_count());
+  const std::vector<ParticleIndex> movable = movable_particles(graph);
   std::vector<idx_t> local(graph.particle_count(), -1);
-  for (std::size_t p = 0; p < graph.particle_count(); ++p) {
-    if (!graph.is_movable(static_cast<ParticleIndex>(p))) continue;
-    local[p] = static_cast<idx_t>(movable.size());
-    movable.push_back(static_cast<ParticleIndex>(p));
-  }
+  for (std::size_t i = 0; i < movable.size(); ++i) local[movable[i]] = static_cast<idx_t>(i);
   if (movable.empty()) return partition;
   part_count = std::clamp<std::size_t>(part_count, 1, movable.size());
   // METIS needs a few vertices per part to do anything useful (and 5.1 fails on one part).
@@ -122,11 +127,7 @@ ParticlePartition partition_particles_in_blocks(const ConstraintGraph& graph,
                                                 std::size_t part_count) {
   ParticlePartition partition;
   partition.part_of_particle.assign(graph.particle_count(), ParticlePartition::kNoPart);
-  std::vector<ParticleIndex> movable;
-  movable.reserve(graph.movable_particle_count());
-  for (std::size_t p = 0; p < graph.particle_count(); ++p)
-    if (graph.is_movable(static_cast<ParticleIndex>(p)))
-      movable.push_back(static_cast<ParticleIndex>(p));
+  const std::vector<ParticleIndex> movable = movable_particles(graph);
   if (movable.empty()) return partition;
   contiguous_blocks(partition, movable, std::clamp<std::size_t>(part_count, 1, movable.size()));
   return partition;

@@ -43,6 +43,9 @@ class ColouringStrategy {
   virtual std::string_view name() const = 0;
   /// One line saying what the strategy does, for listings.
   virtual std::string_view description() const = 0;
+  /// Whether its colourings have parts (Colouring::has_parts) sized by
+  /// ColouringOptions::particles_per_part: the part strategies, metis and blocks.
+  virtual bool makes_parts() const { return false; }
   /// Colours every constraint of the graph so that constraints sharing a movable particle
   /// get different colours.
   virtual Colouring colour(const ConstraintGraph& graph, const ColouringOptions& options) const = 0;

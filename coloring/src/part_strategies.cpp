@@ -60,16 +60,7 @@ class PartStrategy final : public ColouringStrategy {
 
     // Part of each constraint: its particles' common part, or `parts` (crossing, or touching
     // no movable particle).
-    const std::uint32_t crossing = static_cast<std::uint32_t>(parts);
-    std::vector<std::uint32_t> part_of_constraint(count, crossing);
-    tbb::parallel_for(std::size_t(0), count, [&](std::size_t c) {
-      const auto particles = graph.particles_of(static_cast<ConstraintIndex>(c));
-      if (particles.empty()) return;
-      const std::uint32_t first = partition.part_of_particle[particles[0]];
-      for (ParticleIndex p : particles)
-        if (partition.part_of_particle[p] != first) return;
-      part_of_constraint[c] = first;
-    });
+    std::vector<std::uint32_t> part_of_constraint = constraint_parts(graph, partition);
 
     // Constraints grouped by part (crossing last), each group in stencil order (linear, and on
     // regular meshes it packs like the periodic optimum; smallest-last cost seconds here and

@@ -1,5 +1,5 @@
-// METIS k-way partitioning of the particle graph, and the partitioner-free split into runs
-// of the numbering (partition_particles_in_blocks).
+// METIS k-way partitioning of the particle graph, the partitioner-free split into runs of a
+// particle order (partition_particles_in_blocks, _in_runs), and each constraint's part.
 //
 // The particle graph is built in METIS's CSR form (xadj/adjncy over the movable particles,
 // renumbered densely): two passes over particles, each collecting the neighbours through the
@@ -123,14 +123,64 @@ ParticlePartition partition_particles(const ConstraintGraph& graph, std::size_t 
   return partition;
 }
 
-ParticlePartition partition_particles_in_blocks(const ConstraintGraph& graph,
-                                                std::size_t part_count) {
+namespace {
+
+ParticlePartition runs_of(const ConstraintGraph& graph, const std::vector<ParticleIndex>& movable,
+                          std::size_t part_count) {
   ParticlePartition partition;
   partition.part_of_particle.assign(graph.particle_count(), ParticlePartition::kNoPart);
-  const std::vector<ParticleIndex> movable = movable_particles(graph);
   if (movable.empty()) return partition;
   contiguous_blocks(partition, movable, std::clamp<std::size_t>(part_count, 1, movable.size()));
   return partition;
+}
+
+}  // namespace
+
+ParticlePartition partition_particles_in_blocks(const ConstraintGraph& graph,
+                                                std::size_t part_count) {
+  return runs_of(graph, movable_particles(graph), part_count);
+}
+
+ParticlePartition partition_particles_in_runs(const ConstraintGraph& graph,
+                                              std::span<const ParticleIndex> order,
+                                              std::size_t part_count) {
+  const std::size_t n = graph.particle_count();
+  if (order.size() != n)
+    throw InvalidInput("partition_particles_in_runs: the order lists " +
+                       std::to_string(order.size()) + " particles, the graph has " +
+                       std::to_string(n));
+  std::vector<std::uint8_t> seen(n, 0);
+  std::vector<ParticleIndex> movable;
+  movable.reserve(graph.movable_particle_count());
+  for (std::size_t i = 0; i < n; ++i) {
+    const ParticleIndex p = order[i];
+    if (p >= n || seen[p])
+      throw InvalidInput("partition_particles_in_runs: position " + std::to_string(i) +
+                         " of the order names particle " + std::to_string(p) +
+                         (p >= n ? ", past the " + std::to_string(n) + " particles"
+                                 : ", listed before"));
+    seen[p] = 1;
+    if (graph.is_movable(p)) movable.push_back(p);
+  }
+  return runs_of(graph, movable, part_count);
+}
+
+std::vector<std::uint32_t> constraint_parts(const ConstraintGraph& graph,
+                                            const ParticlePartition& partition) {
+  const std::size_t count = graph.constraint_count();
+  const std::uint32_t crossing = static_cast<std::uint32_t>(partition.part_count);
+  std::vector<std::uint32_t> part_of_constraint(count, crossing);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 4096), [&](const auto& range) {
+    for (std::size_t c = range.begin(); c != range.end(); ++c) {
+      const auto particles = graph.particles_of(static_cast<ConstraintIndex>(c));
+      if (particles.empty()) continue;
+      const std::uint32_t first = partition.part_of_particle[particles[0]];
+      bool interior = true;
+      for (ParticleIndex p : particles) interior = interior && partition.part_of_particle[p] == first;
+      if (interior) part_of_constraint[c] = first;
+    }
+  });
+  return part_of_constraint;
 }
 
 }  // namespace tessera

@@ -6,6 +6,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <string>
 #include <tuple>
 #include <utility>
 
@@ -355,6 +356,49 @@ TEST(BlocksStrategy, PartsAreRunsOfTheNumberingStaticParticlesLast) {
   for (const std::size_t size : sizes) EXPECT_LE(size, 195u);
   // Runs of 195 particles are about 5 rows of the cloth: most constraints are inside one.
   EXPECT_GT(interior, graph.constraint_count() / 2);
+}
+
+TEST(ParticlePartition, RunsFollowTheGivenOrderAndStaticParticlesCrossNothing) {
+  // A chain 0–1–…–9 of distance constraints (i, i+1), particle 0 static, taken in reverse
+  // order: the 9 movable particles 9, 8, …, 1 in 3 runs {9, 8, 7}, {6, 5, 4}, {3, 2, 1}.
+  std::vector<Real> inverse_masses(10, Real(1));
+  inverse_masses[0] = 0;
+  std::vector<std::uint32_t> links;
+  for (std::uint32_t i = 0; i < 9; ++i) links.insert(links.end(), {i, i + 1});
+  const std::vector<ConstraintGroup> groups = {ConstraintGroup::fixed_arity("distance", 2, links)};
+  const ConstraintGraph graph(inverse_masses, groups);
+  std::vector<ParticleIndex> reversed(10);
+  for (std::size_t n = 0; n < 10; ++n) reversed[n] = ParticleIndex(9 - n);
+  const ParticlePartition partition = partition_particles_in_runs(graph, reversed, 3);
+  ASSERT_EQ(partition.part_count, 3u);
+  const std::uint32_t none = ParticlePartition::kNoPart;
+  EXPECT_EQ(partition.part_of_particle,
+            (std::vector<std::uint32_t>{none, 2, 2, 2, 1, 1, 1, 0, 0, 0}));
+  // Constraint (0, 1) touches only particle 1 of the movable ones: interior to part 2, as
+  // a sweep only reads the static particle 0. (3, 4) and (6, 7) join two runs: crossing (3).
+  EXPECT_EQ(constraint_parts(graph, partition),
+            (std::vector<std::uint32_t>{2, 2, 2, 3, 1, 1, 3, 0, 0}));
+  // The identity order gives blocks' runs.
+  std::vector<ParticleIndex> identity(10);
+  for (std::size_t n = 0; n < 10; ++n) identity[n] = ParticleIndex(n);
+  EXPECT_EQ(partition_particles_in_runs(graph, identity, 3).part_of_particle,
+            partition_particles_in_blocks(graph, 3).part_of_particle);
+  // An order that is not a permutation of the particles.
+  const auto expect_error = [&](std::vector<ParticleIndex> order, const std::string& words) {
+    try {
+      partition_particles_in_runs(graph, order, 3);
+      FAIL() << "no error; expected one naming " << words;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  expect_error({0, 1, 2}, "the order lists 3 particles, the graph has 10");
+  std::vector<ParticleIndex> twice = identity;
+  twice[7] = 2;
+  expect_error(twice, "position 7 of the order names particle 2, listed before");
+  std::vector<ParticleIndex> past = identity;
+  past[4] = 10;
+  expect_error(past, "names particle 10, past the 10 particles");
 }
 
 TEST(Balance, EvensOutColourSizesWithoutAddingColours) {

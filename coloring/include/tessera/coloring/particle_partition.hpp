@@ -1,10 +1,13 @@
 // Partitioning the movable particles into parts of about a core's cache worth (METIS k-way on
-// the particle graph: particles adjacent when a constraint joins them; or runs of the
-// particles' own numbering). Used by the part strategies (metis, blocks).
+// the particle graph: particles adjacent when a constraint joins them; or runs of a particle
+// order), and the part each constraint then falls in. Used by the part strategies (metis,
+// blocks) and by a part-major schedule of a colouring without parts (runs of its particle
+// order).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <tessera/coloring/constraint_graph.hpp>
@@ -42,5 +45,21 @@ ParticlePartition partition_particles(const ConstraintGraph& graph, std::size_t 
 /// particles): linear, no partitioner. The parts are as compact as the numbering is.
 ParticlePartition partition_particles_in_blocks(const ConstraintGraph& graph,
                                                 std::size_t part_count);
+
+/// The same, with the movable particles taken in the order `order` lists them (a permutation
+/// of the particles: order[n] is the particle at position n, as Colouring::particle_new_to_old;
+/// static particles anywhere in it). Throws tessera::InvalidInput when `order` names another
+/// number of particles, or a particle past the count or twice.
+ParticlePartition partition_particles_in_runs(const ConstraintGraph& graph,
+                                              std::span<const ParticleIndex> order,
+                                              std::size_t part_count);
+
+/// The part of each constraint: the part all its movable particles are in, or
+/// partition.part_count when they are in several parts or it has none (a crossing constraint,
+/// for the colour phases of a part-major sweep). Static particles belong to no part and do not
+/// make a constraint crossing: a sweep only reads them. Parallel; the same for any thread
+/// count.
+std::vector<std::uint32_t> constraint_parts(const ConstraintGraph& graph,
+                                            const ParticlePartition& partition);
 
 }  // namespace tessera

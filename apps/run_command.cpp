@@ -88,9 +88,11 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
   command->add_option("--sweep-order", options.sweep_order,
                       "modes gs and hybrid: colour-major (colour after colour, default) or "
                       "part-major (each part's colours on one worker while its particles stay in "
-                      "cache, the parts in parallel; needs --strategy metis or blocks)");
+                      "cache, the parts in parallel; the parts of --strategy metis or blocks, or "
+                      "runs of the colouring's particle order)");
   command->add_option("--particles-per-part", options.particles_per_part,
-                      "strategies metis and blocks: movable particles per part (default 65536)")
+                      "movable particles per part of strategies metis and blocks, or of "
+                      "--sweep-order part-major (default 65536)")
       ->check(CLI::PositiveNumber);
   command->add_option("--divergence-rms", options.divergence_rms,
                       "a step that ends with an RMS residual above this fails (default 10; inf "
@@ -150,12 +152,16 @@ int run_command(const RunOptions& options) {
   const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   const ColouringStrategy& strategy = registry.get(simulation.strategy);
   if (options.particles_per_part && !strategy.makes_parts()) {
-    std::string with_parts;
-    for (const std::string_view name : registry.names())
-      if (registry.get(name).makes_parts())
-        with_parts += (with_parts.empty() ? "" : " and ") + std::string(name);
-    throw InvalidInput("--particles-per-part: strategy " + simulation.strategy +
-                       " has no parts (strategies " + with_parts + " have)");
+    if (settings.sweep_order != SweepOrder::part_major) {
+      std::string with_parts;
+      for (const std::string_view name : registry.names())
+        if (registry.get(name).makes_parts())
+          with_parts += (with_parts.empty() ? "" : " and ") + std::string(name);
+      throw InvalidInput("--particles-per-part: strategy " + simulation.strategy +
+                         " has no parts (strategies " + with_parts +
+                         " have), and the sweep order is not part-major");
+    }
+    settings.particles_per_part = *options.particles_per_part;
   }
 
   io::Scene scene = io::build_scene(description);
@@ -231,7 +237,11 @@ int run_command(const RunOptions& options) {
   summary.add("mode", std::string(solver_mode_name(settings.mode)));
   summary.add("particle_layout", std::string(particle_layout_name(settings.particle_layout)));
   summary.add("sweep_order", std::string(sweep_order_name(settings.sweep_order)));
-  summary.add("parts", colouring ? colouring->colouring.part_count() : 0);
+  // The parts the sweep ran (part-major: the colouring's, or runs of its particle order), else
+  // the colouring's.
+  summary.add("parts", settings.sweep_order == SweepOrder::part_major ? statistics.part_count
+                       : colouring                                    ? colouring->colouring.part_count()
+                                                                      : 0);
   summary.add("threads", statistics.threads);
   summary.add("frames", simulation.frames);
   summary.add("substeps", simulation.substeps);

@@ -4,7 +4,8 @@
 //                        (kPadding for the gaps that align each colour to kMaxLanes), or its
 //                        place in the Jacobi set's list; the phases' blocks (place_by_part
 //                        for SweepOrder::part_major: each part's colours first, one block per
-//                        colour and family, then the crossing constraints' phases)
+//                        colour and family, then the crossing constraints' phases; the parts
+//                        the colouring's, or runs of the particle order when it has none)
 //   reorder_batch        every batch gathered through its list (batch_reorder.hpp)
 //   build_jacobi_set     the Jacobi set and its incidences (jacobi_set.cpp)
 //   build_stages         the mode's stage list (stage.hpp)
@@ -19,6 +20,7 @@
 #include <string>
 
 #include <tessera/coloring/colouring_strategy.hpp>
+#include <tessera/coloring/particle_partition.hpp>
 #include <tessera/core/error.hpp>
 #include <tessera/core/simd.hpp>
 #include <tessera/parallel/threads.hpp>
@@ -92,18 +94,34 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
     throw InvalidInput("schedule: the colouring colours " +
                        std::to_string(colouring->constraint_count()) +
                        " constraints, the model has " + std::to_string(constraint_count()));
-  if (options_.sweep_order == SweepOrder::part_major && !colouring->has_parts())
-    throw InvalidInput("schedule: sweep order part-major needs a colouring with parts "
-                       "(strategy metis or blocks)");
   const std::size_t particle_count = model.particles.size();
   take_particle_order(*colouring, particle_count);
 
   SourceLists& coloured_source = coloured_source_;
   SourceLists& jacobi_source = jacobi_source_;
-  if (options_.sweep_order == SweepOrder::part_major)
-    place_by_part(model, *colouring, coloured_source, jacobi_source);
-  else
+  if (options_.sweep_order == SweepOrder::part_major && colouring->has_parts()) {
+    place_by_part(constraint_graph(model), *colouring, colouring->part_of_constraint(),
+                  colouring->part_count(), coloured_source, jacobi_source);
+  } else if (options_.sweep_order == SweepOrder::part_major) {
+    // Parts of the colouring's own particle order: any colouring keeps its guarantee within a
+    // part, and the schedule lays the particles out in that order, so a run of it is a
+    // contiguous range of the particle arrays (and, with the locality pass, a compact piece of
+    // the mesh).
+    const ConstraintGraph graph = constraint_graph(model);
+    std::vector<ParticleIndex> order(new_to_old_.begin(), new_to_old_.end());
+    if (order.empty()) {
+      order.resize(particle_count);
+      for (std::size_t p = 0; p < particle_count; ++p) order[p] = ParticleIndex(p);
+    }
+    const std::size_t per_part = options_.particles_per_part != 0 ? options_.particles_per_part
+                                                                  : kDefaultParticlesPerPart;
+    const ParticlePartition partition = partition_particles_in_runs(
+        graph, order, (graph.movable_particle_count() + per_part - 1) / per_part);
+    place_by_part(graph, *colouring, constraint_parts(graph, partition), partition.part_count,
+                  coloured_source, jacobi_source);
+  } else {
     place_by_colour(*colouring, coloured_source, jacobi_source);
+  }
   for (std::size_t f = 0; f < kConstraintFamilyCount; ++f)
     if (std::max(coloured_source[f].size(), jacobi_source[f].size()) >= kMostConstraintsPerFamily)
       throw InvalidInput("schedule: more than 2^30 constraints in one family");
@@ -220,13 +238,11 @@ void Schedule::place_by_colour(const Colouring& colouring, SourceLists& coloured
 // family: the part is one worker's), then the crossing constraints as colour phases. A part's
 // blocks run while other parts' run, so the colouring's claim that its interior constraints
 // share no movable particle with another part's is checked here: a wrong claim would be a race.
-void Schedule::place_by_part(const Model& model, const Colouring& colouring,
+void Schedule::place_by_part(const ConstraintGraph& graph, const Colouring& colouring,
+                             std::span<const std::uint32_t> part_of, std::size_t parts,
                              SourceLists& coloured, SourceLists& jacobi) {
-  const std::size_t parts = colouring.part_count();
-  const auto part_of = colouring.part_of_constraint();
   constexpr std::uint32_t kNoOwner = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> owner(model.particles.size(), kNoOwner);
-  const ConstraintGraph graph = constraint_graph(model);
+  std::vector<std::uint32_t> owner(graph.particle_count(), kNoOwner);
   for (ConstraintIndex c = 0; c < constraint_count(); ++c) {
     const std::uint32_t part = part_of[c];
     if (part == parts) continue;

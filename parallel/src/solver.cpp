@@ -162,7 +162,8 @@ Solver::Solver(Model model, const Colouring& colouring, const SolverSettings& se
       settings_.mode == SolverMode::sequential ? 1 : worker_threads(settings_.threads);
   schedule_ = Schedule(model, &colouring,
                        {settings_.mode, settings_.block_size, settings_.hybrid_threshold, threads,
-                        settings_.sequential_order, settings_.sweep_order});
+                        settings_.sequential_order, settings_.sweep_order,
+                        settings_.particles_per_part});
   state_ = scheduled_particles(model.particles, schedule_);
   jacobi_work_.bind(schedule_.jacobi());
   if (settings_.chebyshev && settings_.mode == SolverMode::jacobi)

@@ -81,7 +81,7 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
                              double divergence_rms, const std::string& sequential_order,
                              const std::string& contact_scheduling,
                              const std::string& particle_layout,
-                             const std::string& sweep_order) {
+                             const std::string& sweep_order, std::size_t particles_per_part) {
   SolverSettings s;
   s.mode = parse_solver_mode(mode);
   s.threads = threads;
@@ -109,6 +109,7 @@ SolverSettings make_settings(const std::string& mode, std::size_t threads,
   s.contact_scheduling = parse_contact_scheduling(contact_scheduling);
   s.particle_layout = parse_particle_layout(particle_layout);
   s.sweep_order = parse_sweep_order(sweep_order);
+  s.particles_per_part = particles_per_part;
   return s;
 }
 
@@ -130,12 +131,14 @@ void bind_solver(py::module_& m) {
                        std::size_t hybrid_threshold, bool report_residuals,
                        bool record_convergence, bool check_finite, double divergence_rms,
                        const std::string& sequential_order, const std::string& contact_scheduling,
-                       const std::string& particle_layout, const std::string& sweep_order) {
+                       const std::string& particle_layout, const std::string& sweep_order,
+                       std::size_t particles_per_part) {
              const SolverSettings settings = make_settings(
                  mode, threads, semantics, time_step, substeps, iterations, gravity,
                  velocity_damping, jacobi_relaxation, block_size, hybrid_threshold,
                  report_residuals, record_convergence, check_finite, divergence_rms,
-                 sequential_order, contact_scheduling, particle_layout, sweep_order);
+                 sequential_order, contact_scheduling, particle_layout, sweep_order,
+                 particles_per_part);
              if (settings.mode == SolverMode::sequential && !colouring) return Solver(model, settings);
              if (!colouring)
                throw InvalidInput("solver: mode " + mode +
@@ -161,7 +164,8 @@ void bind_solver(py::module_& m) {
            py::arg("contact_scheduling") =
                std::string(contact_scheduling_name(kDefaultContactScheduling)),
            py::arg("particle_layout") = std::string(particle_layout_name(kDefaultParticleLayout)),
-           py::arg("sweep_order") = std::string(sweep_order_name(SweepOrder::colour_major)))
+           py::arg("sweep_order") = std::string(sweep_order_name(SweepOrder::colour_major)),
+           py::arg("particles_per_part") = 0)
       .def(
           "step",
           [](Solver& solver, std::size_t steps) {

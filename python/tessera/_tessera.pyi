@@ -263,6 +263,7 @@ class Solver:
         contact_scheduling: str = "coloured",
         particle_layout: str = "interleaved",
         sweep_order: str = "colour-major",
+        particles_per_part: int = 0,
     ) -> None: ...
     def step(self, steps: int = 1) -> None:
         """`steps` time steps; raises NumericalFailure (state restored). Releases the GIL."""

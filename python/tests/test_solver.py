@@ -53,8 +53,19 @@ def test_part_major_sweeps_as_the_tool_does_for_any_thread_count(tool):
                     "--particles-per-part", "256", "--sweep-order", "part-major")
     assert hashes == {expected["state_hash"]}
     assert expected["sweep_order"] == "part-major" and expected["parts"] >= 4
-    with pytest.raises(ValueError, match="needs a colouring with parts"):
-        tessera.Solver(scene.model, tessera.colour(scene.model, "greedy"), sweep_order="part-major")
+    # A colouring without parts: runs of 200 movable particles of its particle order.
+    greedy = tessera.colour(scene.model, "greedy", locality=True)
+    hashes = set()
+    for threads in (1, 2):
+        settings = scene.solver_settings() | {"sweep_order": "part-major", "threads": threads,
+                                              "particles_per_part": 200}
+        solver = tessera.Solver(scene.model, greedy, **settings)
+        solver.step(3)
+        hashes.add(solver.state_hash())
+    expected = tool("run", "cloth:40", "--frames", "3", "--strategy", "greedy",
+                    "--particles-per-part", "200", "--sweep-order", "part-major")
+    assert hashes == {expected["state_hash"]}
+    assert expected["parts"] == 8
 
 
 def test_a_model_from_arrays_solves_as_the_scene_it_copies():

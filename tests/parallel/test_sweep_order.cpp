@@ -1,5 +1,6 @@
 // SweepOrder::part_major: each part's interior constraints colour after colour on one
-// worker, the parts in parallel, then the crossing constraints' colour phases. Checked: it
+// worker, the parts in parallel, then the crossing constraints' colour phases. The parts are
+// the colouring's (metis, blocks), or runs of its particle order (any other). Checked: it
 // projects every constraint once per iteration (with one part it is colour-major's sweep,
 // bit for bit), any thread count gives the same bits, it converges like colour-major, and the
 // colouring's claim about its parts is verified, not trusted.
@@ -74,6 +75,66 @@ TEST(SweepOrder, PartMajorGivesTheSameBitsForAnyThreadCount) {
     }
 }
 
+TEST(SweepOrder, AColouringWithoutPartsSweepsRunsOfItsParticleOrder) {
+  // The tool's default colouring (stencil, particles renumbered by the locality pass) and one
+  // that keeps the user's numbering (greedy): parts of at most 128 movable particles of the
+  // schedule's order, the same bits for any thread count, another order than colour-major.
+  const Model cloth = test::cloth_model(40, 32);
+  const ConstraintGraph graph = constraint_graph(cloth);
+  const std::size_t movable = graph.movable_particle_count();
+  const Colouring stencil =
+      run_colouring(*make_stencil_strategy(), graph, {.locality = true}).colouring;
+  ASSERT_TRUE(stencil.renumbers_particles());
+  const Colouring greedy = test::colour_model(cloth, "greedy");
+  for (const Colouring* colouring : {&stencil, &greedy}) {
+    ASSERT_FALSE(colouring->has_parts());
+    SolverSettings settings = settings_with(SweepOrder::part_major, 1);
+    settings.particles_per_part = 128;
+    const auto one = after_steps(cloth, *colouring, settings, 4);
+    for (const std::size_t threads : {2u, 3u, 7u}) {
+      settings.threads = threads;
+      EXPECT_TRUE(test::same_bits(one, after_steps(cloth, *colouring, settings, 4)))
+          << threads << " threads";
+    }
+    EXPECT_FALSE(test::same_bits(
+        one, after_steps(cloth, *colouring, settings_with(SweepOrder::colour_major, 1), 4)));
+    // The runs: ceil(movable / 128) parts; a constraint is interior when its movable
+    // particles' scheduled ranks fall in one run of 128.
+    const Solver solver(cloth, *colouring, settings);
+    EXPECT_EQ(solver.statistics().part_count, (movable + 127) / 128);
+    std::vector<std::size_t> rank(cloth.particles.size(), 0);
+    {
+      std::vector<std::pair<ParticleIndex, ParticleIndex>> scheduled;
+      for (std::size_t p = 0; p < cloth.particles.size(); ++p)
+        if (graph.is_movable(ParticleIndex(p)))
+          scheduled.emplace_back(colouring->renumbers_particles()
+                                     ? colouring->particle_old_to_new()[p]
+                                     : ParticleIndex(p),
+                                 ParticleIndex(p));
+      std::sort(scheduled.begin(), scheduled.end());
+      for (std::size_t r = 0; r < scheduled.size(); ++r) rank[scheduled[r].second] = r;
+    }
+    const std::size_t parts = (movable + 127) / 128;
+    std::size_t interior = 0;
+    for (ConstraintIndex c = 0; c < graph.constraint_count(); ++c) {
+      const auto particles = graph.particles_of(c);
+      if (particles.empty()) continue;
+      const std::size_t first = rank[particles[0]] * parts / movable;
+      interior += std::all_of(particles.begin(), particles.end(), [&](ParticleIndex p) {
+        return rank[p] * parts / movable == first;
+      });
+    }
+    EXPECT_EQ(solver.statistics().part_constraints, interior);
+    EXPECT_GT(interior, graph.constraint_count() / 2);
+  }
+  // One part holding every movable particle: colour-major's sweep, bit for bit.
+  SolverSettings whole = settings_with(SweepOrder::part_major, 2);
+  whole.particles_per_part = movable;
+  EXPECT_TRUE(test::same_bits(
+      after_steps(cloth, stencil, whole, 3),
+      after_steps(cloth, stencil, settings_with(SweepOrder::colour_major, 2), 3)));
+}
+
 TEST(SweepOrder, EveryConstraintIsInAPartOrAPhaseAndTheStatisticsSaySo) {
   const Model cloth = test::cloth_model(40, 32);
   const Colouring colouring = part_colouring(cloth, 128);
@@ -144,9 +205,6 @@ TEST(SweepOrder, WrongUseIsAClearError) {
       EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
     }
   };
-  // A colouring without parts.
-  expect_error([&] { Solver(cloth, test::colour_model(cloth, "greedy"), settings_with(SweepOrder::part_major, 1)); },
-               "needs a colouring with parts");
   // A mode without colour phases.
   const Colouring metis = part_colouring(cloth, 64);
   SolverSettings jacobi = settings_with(SweepOrder::part_major, 1);

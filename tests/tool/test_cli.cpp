@@ -161,12 +161,25 @@ TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountAndNeedsParts) {
     EXPECT_NE(bad.err.find(words), std::string::npos) << bad.err;
     EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
   };
-  expect_clear_error({"run", "cloth:12", "--frames", "1", "--sweep-order", "part-major"},
-                     "needs a colouring with parts");
+  // The default colouring (stencil) has no parts: runs of its particle order, here of 200
+  // movable particles (cloth:40 pins 2 of 1,600).
+  std::vector<std::string> runs = {"run", "cloth:40", "--frames", "3", "--sweep-order",
+                                   "part-major", "--particles-per-part", "200"};
+  auto runs_two = runs;
+  runs.insert(runs.end(), {"--threads", "1"});
+  runs_two.insert(runs_two.end(), {"--threads", "2"});
+  const Json e = run_json(runs), f = run_json(runs_two);
+  EXPECT_EQ(e["strategy"], "stencil");
+  EXPECT_EQ(e["parts"].get<int>(), 8);
+  EXPECT_EQ(e["state_hash"], f["state_hash"]);
+  const Json stencil = run_json({"run", "cloth:40", "--frames", "3"});
+  EXPECT_EQ(stencil["parts"].get<int>(), 0);
+  EXPECT_NE(stencil["state_hash"], e["state_hash"]);
   expect_clear_error({"run", "cloth:12", "--frames", "1", "--sweep-order", "diagonal"},
                      "unknown sweep order 'diagonal'");
   expect_clear_error({"run", "cloth:12", "--frames", "1", "--particles-per-part", "64"},
-                     "strategy stencil has no parts");
+                     "strategy stencil has no parts (strategies metis and blocks have), and the "
+                     "sweep order is not part-major");
 }
 
 TEST_F(Cli, RunSummaryHoldsEveryKey) {
@@ -508,6 +521,7 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
       {{"run", "--sequential-order", "random"}, "tessera run: unknown sequential order 'random' (known: groups, input)"},
       {{"run", "--divergence-rms", "0"}, "tessera run: --divergence-rms: must be a number above 0 or inf, not '0'"},
       {{"run", "--strategy", "nope"}, "tessera run: unknown colouring strategy 'nope' " + strategies},
+      {{"run", "--particles-per-part", "64"}, "tessera run: --particles-per-part: strategy stencil has no parts (strategies metis and blocks have), and the sweep order is not part-major"},
       {{"run", "--pins", "left"}, "tessera run: --pins: unknown pin rule 'left' (known: default, none, lowest-x, lowest-y, lowest-z, highest-x, highest-y, highest-z)"},
       {{"run", "--bending", "floppy"}, "tessera run: --bending: unknown value 'floppy' (known: dihedral, isometric, none)"},
       {{"run", "--shell-material", "silk"}, "tessera run: --shell-material: unknown value 'silk' (known: distance, strain_triangle, fem_triangle)"},

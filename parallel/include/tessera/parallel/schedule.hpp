@@ -67,9 +67,12 @@ struct ScheduleOptions {
   std::size_t threads = 1;
   /// Mode sequential: the order of the sweep.
   SequentialOrder sequential_order = SequentialOrder::groups;
-  /// Modes gs and hybrid: colour after colour, or part after part (the colouring must have
-  /// parts, Colouring::has_parts; InvalidInput otherwise, or in another mode).
+  /// Modes gs and hybrid: colour after colour, or part after part (InvalidInput in another
+  /// mode). Part after part takes the colouring's parts (Colouring::has_parts), or, for a
+  /// colouring without parts, runs of particles_per_part movable particles of the schedule's
+  /// particle order (0: kDefaultParticlesPerPart).
   SweepOrder sweep_order = SweepOrder::colour_major;
+  std::size_t particles_per_part = 0;
 };
 
 /// Constraints [begin, end) of one family's scheduled batch: a colour's family (cut per
@@ -197,8 +200,10 @@ class Schedule {
   void lay_out_in_input_order(const Model& model);
   void take_particle_order(const Colouring& colouring, std::size_t particle_count);
   void place_by_colour(const Colouring& colouring, SourceLists& coloured, SourceLists& jacobi);
-  void place_by_part(const Model& model, const Colouring& colouring, SourceLists& coloured,
-                     SourceLists& jacobi);
+  /// part_of[c]: constraint c's part, or `parts` for a crossing one.
+  void place_by_part(const ConstraintGraph& graph, const Colouring& colouring,
+                     std::span<const std::uint32_t> part_of, std::size_t parts,
+                     SourceLists& coloured, SourceLists& jacobi);
   /// members[f] = the constraints (global ids) of family f, as indices within the family.
   void split_by_family(std::span<const ConstraintIndex> constraints, SourceLists& members) const;
   /// Appends one colour's (or one part's colour's) constraints, per family, to the coloured

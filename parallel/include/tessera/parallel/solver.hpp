@@ -170,9 +170,11 @@ struct SolverSettings {
   ContactScheduling contact_scheduling = kDefaultContactScheduling;
   /// How the sweeps hold the particles (solver_mode.hpp); the same bits either way.
   ParticleLayout particle_layout = kDefaultParticleLayout;
-  /// Modes gs and hybrid: colour after colour, or part after part (solver_mode.hpp; needs a
-  /// colouring with parts, strategy metis or blocks).
+  /// Modes gs and hybrid: colour after colour, or part after part (solver_mode.hpp): the
+  /// colouring's parts (strategies metis and blocks), or for any other colouring runs of
+  /// particles_per_part movable particles of its particle order (0: kDefaultParticlesPerPart).
   SweepOrder sweep_order = SweepOrder::colour_major;
+  std::size_t particles_per_part = 0;
   /// Consecutive coloured phases run in one parallel region per iteration, the threads
   /// meeting at a spin barrier between colours (parallel/src/phase_region.hpp); with coloured
   /// phases only, a step's substeps but the last and their particle passes run in one region

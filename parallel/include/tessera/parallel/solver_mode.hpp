@@ -82,7 +82,8 @@ enum class SweepOrder : std::uint8_t {
   /// Colour after colour, each colour's blocks in parallel: a barrier per colour, and every
   /// colour reaches across the whole particle array.
   colour_major,
-  /// Part after part (a colouring with parts: strategy metis or blocks), the parts in parallel:
+  /// Part after part (the colouring's parts, strategies metis and blocks, or runs of its
+  /// particle order: SolverSettings::particles_per_part), the parts in parallel:
   /// each worker sweeps every colour of its parts' interior constraints while those particles stay
   /// in its cache, then the crossing constraints colour after colour as in colour_major. One
   /// barrier for all the interior work; a different Gauss–Seidel order (interior before crossing),

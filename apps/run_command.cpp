@@ -242,6 +242,8 @@ int run_command(const RunOptions& options) {
   summary.add("parts", settings.sweep_order == SweepOrder::part_major ? statistics.part_count
                        : colouring                                    ? colouring->colouring.part_count()
                                                                       : 0);
+  // Of the constraints, those the parts sweep (the rest cross parts: the colour phases).
+  summary.add("part_constraints", statistics.part_constraints);
   summary.add("threads", statistics.threads);
   summary.add("frames", simulation.frames);
   summary.add("substeps", simulation.substeps);

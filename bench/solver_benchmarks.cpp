@@ -24,7 +24,7 @@
 // solver_size_separate/gs/<largest size>: the same with ParticleLayout::separate;
 // solver_size_part_major/gs/<largest size>: with SweepOrder::part_major on METIS parts of
 // 16,384 particles. solver_order/<order>/<strategy>/<scene>: both sweep orders on the same
-// METIS colourings.
+// METIS colourings, and on stencil+locality (part-major over runs of its particle order).
 //
 // Traffic model, bytes a projection must move between memory and the core when nothing is
 // reused from cache: for each of its N particles, x, y, z and inverse mass gathered (4 reals)
@@ -258,9 +258,11 @@ void register_benchmarks() {
       b->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond)->Arg(2);
     }
   // Part-major against colour-major on the same METIS colourings (part sizes: 4,096 and
-  // 16,384 particles, 64 and 256 KiB of interleaved floats, against L2; 65,536, the default).
+  // 16,384 particles, 64 and 256 KiB of interleaved floats, against L2; 65,536, the default),
+  // and on the tool's default colouring, whose part-major parts are runs of 65,536 particles
+  // of its locality order.
   for (const SweepOrder order : {SweepOrder::colour_major, SweepOrder::part_major})
-    for (const char* strategy : {"metis@4096", "metis@16384", "metis"})
+    for (const char* strategy : {"metis@4096", "metis@16384", "metis", "stencil+locality"})
       for (const char* scene_name : {"cloth256", "cloth1024", "tetbar200k"}) {
         const std::string name = "solver_order/" + std::string(sweep_order_name(order)) + "/" +
                                  strategy + "/" + scene_name;

@@ -171,9 +171,12 @@ TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountAndNeedsParts) {
   const Json e = run_json(runs), f = run_json(runs_two);
   EXPECT_EQ(e["strategy"], "stencil");
   EXPECT_EQ(e["parts"].get<int>(), 8);
+  EXPECT_GT(e["part_constraints"].get<int>(), e["constraints"].get<int>() / 2);
+  EXPECT_LT(e["part_constraints"].get<int>(), e["constraints"].get<int>());
   EXPECT_EQ(e["state_hash"], f["state_hash"]);
   const Json stencil = run_json({"run", "cloth:40", "--frames", "3"});
   EXPECT_EQ(stencil["parts"].get<int>(), 0);
+  EXPECT_EQ(stencil["part_constraints"].get<int>(), 0);
   EXPECT_NE(stencil["state_hash"], e["state_hash"]);
   expect_clear_error({"run", "cloth:12", "--frames", "1", "--sweep-order", "diagonal"},
                      "unknown sweep order 'diagonal'");
@@ -186,7 +189,7 @@ TEST_F(Cli, RunSummaryHoldsEveryKey) {
   const Json summary = run_json({"run", "cloth:12x10", "--frames", "3", "--threads", "2"});
   for (const char* key : {"scene", "particles", "constraints", "colours", "colour_lower_bound",
                           "strategy", "mode", "particle_layout", "sweep_order", "parts",
-                          "threads", "frames",
+                          "part_constraints", "threads", "frames",
                           "substeps", "iterations",
                           "seconds_total", "seconds_coloring", "seconds_projection",
                           "projections_per_second", "residual_rms_initial",

@@ -156,10 +156,10 @@ int run_command(const RunOptions& options) {
       std::string with_parts;
       for (const std::string_view name : registry.names())
         if (registry.get(name).makes_parts())
-          with_parts += (with_parts.empty() ? "" : " and ") + std::string(name);
-      throw InvalidInput("--particles-per-part: strategy " + simulation.strategy +
-                         " has no parts (strategies " + with_parts +
-                         " have), and the sweep order is not part-major");
+          with_parts += (with_parts.empty() ? "" : " or ") + std::string(name);
+      throw InvalidInput("--particles-per-part: needs a strategy with parts (" + with_parts +
+                         ") or --sweep-order part-major (strategy " + simulation.strategy +
+                         " has none)");
     }
     settings.particles_per_part = *options.particles_per_part;
   }
@@ -237,11 +237,12 @@ int run_command(const RunOptions& options) {
   summary.add("mode", std::string(solver_mode_name(settings.mode)));
   summary.add("particle_layout", std::string(particle_layout_name(settings.particle_layout)));
   summary.add("sweep_order", std::string(sweep_order_name(settings.sweep_order)));
-  // The parts the sweep ran (part-major: the colouring's, or runs of its particle order), else
-  // the colouring's.
-  summary.add("parts", settings.sweep_order == SweepOrder::part_major ? statistics.part_count
-                       : colouring                                    ? colouring->colouring.part_count()
-                                                                      : 0);
+  // The parts the sweep ran (part-major: the colouring's, or runs of its particle order);
+  // colour-major: the colouring's, which it does not use.
+  std::size_t parts = statistics.part_count;
+  if (settings.sweep_order != SweepOrder::part_major && colouring)
+    parts = colouring->colouring.part_count();
+  summary.add("parts", parts);
   // Of the constraints, those the parts sweep (the rest cross parts: the colour phases).
   summary.add("part_constraints", statistics.part_constraints);
   summary.add("threads", statistics.threads);

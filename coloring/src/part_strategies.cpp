@@ -50,12 +50,9 @@ class PartStrategy final : public ColouringStrategy {
 
   Colouring colour(const ConstraintGraph& graph, const ColouringOptions& options) const override {
     const std::size_t count = graph.constraint_count();
-    const std::size_t per_part = options.particles_per_part != 0
-                                     ? options.particles_per_part
-                                     : kDefaultParticlesPerPart;
-    const std::size_t movable = graph.movable_particle_count();
-    const std::size_t parts_asked = (movable + per_part - 1) / std::max<std::size_t>(per_part, 1);
-    const ParticlePartition partition = partitioner_(graph, parts_asked, options.seed);
+    const ParticlePartition partition = partitioner_(
+        graph, part_count_for(graph.movable_particle_count(), options.particles_per_part),
+        options.seed);
     const std::size_t parts = partition.part_count;
 
     // Part of each constraint: its particles' common part, or `parts` (crossing, or touching

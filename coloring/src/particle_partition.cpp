@@ -167,6 +167,17 @@ ParticlePartition partition_particles_in_runs(const ConstraintGraph& graph,
 
 std::vector<std::uint32_t> constraint_parts(const ConstraintGraph& graph,
                                             const ParticlePartition& partition) {
+  const auto& part_of = partition.part_of_particle;
+  if (part_of.size() != graph.particle_count())
+    throw InvalidInput("constraint_parts: the partition is of " + std::to_string(part_of.size()) +
+                       " particles, the graph has " + std::to_string(graph.particle_count()));
+  for (std::size_t p = 0; p < part_of.size(); ++p)
+    if (graph.is_movable(ParticleIndex(p)) && part_of[p] >= partition.part_count)
+      throw InvalidInput("constraint_parts: movable particle " + std::to_string(p) +
+                         (part_of[p] == ParticlePartition::kNoPart
+                              ? std::string(" is in no part")
+                              : " is in part " + std::to_string(part_of[p]) + " of " +
+                                    std::to_string(partition.part_count)));
   const std::size_t count = graph.constraint_count();
   const std::uint32_t crossing = static_cast<std::uint32_t>(partition.part_count);
   std::vector<std::uint32_t> part_of_constraint(count, crossing);
@@ -174,10 +185,10 @@ std::vector<std::uint32_t> constraint_parts(const ConstraintGraph& graph,
     for (std::size_t c = range.begin(); c != range.end(); ++c) {
       const auto particles = graph.particles_of(static_cast<ConstraintIndex>(c));
       if (particles.empty()) continue;
-      const std::uint32_t first = partition.part_of_particle[particles[0]];
-      bool interior = true;
-      for (ParticleIndex p : particles) interior = interior && partition.part_of_particle[p] == first;
-      if (interior) part_of_constraint[c] = first;
+      const std::uint32_t first = part_of[particles[0]];
+      if (std::all_of(particles.begin(), particles.end(),
+                      [&](ParticleIndex p) { return part_of[p] == first; }))
+        part_of_constraint[c] = first;
     }
   });
   return part_of_constraint;

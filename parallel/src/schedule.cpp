@@ -99,6 +99,15 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
 
   SourceLists& coloured_source = coloured_source_;
   SourceLists& jacobi_source = jacobi_source_;
+  if (options_.particles_per_part != 0 &&
+      (options_.sweep_order != SweepOrder::part_major || colouring->has_parts()))
+    throw InvalidInput(
+        "schedule: particles per part sizes the runs a part-major sweep makes of a colouring "
+        "without parts; " +
+        std::string(options_.sweep_order != SweepOrder::part_major
+                        ? "this sweep is colour-major"
+                        : "this colouring has its own parts (its strategy's particles per part "
+                          "sizes them)"));
   if (options_.sweep_order == SweepOrder::part_major && colouring->has_parts()) {
     place_by_part(constraint_graph(model), *colouring, colouring->part_of_constraint(),
                   colouring->part_count(), coloured_source, jacobi_source);
@@ -108,15 +117,14 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
     // contiguous range of the particle arrays (and, with the locality pass, a compact piece of
     // the mesh).
     const ConstraintGraph graph = constraint_graph(model);
-    std::vector<ParticleIndex> order(new_to_old_.begin(), new_to_old_.end());
-    if (order.empty()) {
-      order.resize(particle_count);
-      for (std::size_t p = 0; p < particle_count; ++p) order[p] = ParticleIndex(p);
+    std::vector<ParticleIndex> identity;
+    if (new_to_old_.empty()) {
+      identity.resize(particle_count);
+      for (std::size_t p = 0; p < particle_count; ++p) identity[p] = ParticleIndex(p);
     }
-    const std::size_t per_part = options_.particles_per_part != 0 ? options_.particles_per_part
-                                                                  : kDefaultParticlesPerPart;
     const ParticlePartition partition = partition_particles_in_runs(
-        graph, order, (graph.movable_particle_count() + per_part - 1) / per_part);
+        graph, new_to_old_.empty() ? std::span<const ParticleIndex>(identity) : new_to_old_,
+        part_count_for(graph.movable_particle_count(), options_.particles_per_part));
     place_by_part(graph, *colouring, constraint_parts(graph, partition), partition.part_count,
                   coloured_source, jacobi_source);
   } else {
@@ -256,34 +264,39 @@ void Schedule::place_by_part(const ConstraintGraph& graph, const Colouring& colo
                            "part's)");
     }
   }
-  // Each part's members colour after colour, then the crossing ones (bucket `parts`).
-  std::vector<std::vector<ConstraintIndex>> bucket(parts + 1);
-  std::vector<std::vector<std::uint32_t>> colour_start(parts + 1);
-  for (Colour k = 0; k < colouring.colour_count(); ++k) {
-    for (std::size_t b = 0; b <= parts; ++b)
-      colour_start[b].push_back(std::uint32_t(bucket[b].size()));
-    for (const ConstraintIndex c : colouring.constraints_of(k)) bucket[part_of[c]].push_back(c);
+  // Each part's members colour after colour, then the crossing ones (part `parts`): a stable
+  // counting sort by part of the constraints in colour order (memory linear in the
+  // constraints and parts, not their product: parts may be as small as one particle).
+  std::vector<std::uint32_t> part_start(parts + 2, 0);
+  for (ConstraintIndex c = 0; c < constraint_count(); ++c) ++part_start[part_of[c] + 1];
+  for (std::size_t b = 0; b <= parts; ++b) part_start[b + 1] += part_start[b];
+  std::vector<ConstraintIndex> by_part(constraint_count());
+  {
+    std::vector<std::uint32_t> cursor(part_start.begin(), part_start.end() - 1);
+    for (Colour k = 0; k < colouring.colour_count(); ++k)
+      for (const ConstraintIndex c : colouring.constraints_of(k)) by_part[cursor[part_of[c]]++] = c;
   }
-  for (std::size_t b = 0; b <= parts; ++b)
-    colour_start[b].push_back(std::uint32_t(bucket[b].size()));
-
+  // Calls place(members, size) for each colour's run of part b's members, in colour order.
   SourceLists members;
-  const auto gather = [&](std::size_t b, Colour k) {
-    split_by_family({bucket[b].data() + colour_start[b][k], bucket[b].data() + colour_start[b][k + 1]},
-                    members);
-    return colour_start[b][k + 1] - colour_start[b][k];
+  const auto for_each_colour_of = [&](std::size_t b, auto&& place) {
+    for (std::uint32_t i = part_start[b]; i < part_start[b + 1];) {
+      const Colour k = colouring.colour_of(by_part[i]);
+      std::uint32_t end = i;
+      while (end < part_start[b + 1] && colouring.colour_of(by_part[end]) == k) ++end;
+      split_by_family({by_part.data() + i, by_part.data() + end}, members);
+      place(end - i);
+      i = end;
+    }
   };
   part_offsets_.push_back(0);
   for (std::size_t part = 0; part < parts; ++part) {
-    for (Colour k = 0; k < colouring.colour_count(); ++k)
-      if (gather(part, k) != 0) append_group(members, coloured);
+    for_each_colour_of(part, [&](std::size_t) { append_group(members, coloured); });
     part_offsets_.push_back(blocks_.size());
   }
   phase_offsets_.push_back(blocks_.size());
-  for (Colour k = 0; k < colouring.colour_count(); ++k) {
-    const std::size_t size = gather(parts, k);
-    if (size != 0) append_phase(members, size, to_jacobi(size), coloured, jacobi);
-  }
+  for_each_colour_of(parts, [&](std::size_t size) {
+    append_phase(members, size, to_jacobi(size), coloured, jacobi);
+  });
 }
 
 void Schedule::build_stages() {

@@ -399,6 +399,24 @@ TEST(ParticlePartition, RunsFollowTheGivenOrderAndStaticParticlesCrossNothing) {
   std::vector<ParticleIndex> past = identity;
   past[4] = 10;
   expect_error(past, "names particle 10, past the 10 particles");
+  // A partition that does not fit the graph, or leaves a movable particle out.
+  const auto expect_parts_error = [&](const ParticlePartition& bad, const std::string& words) {
+    try {
+      constraint_parts(graph, bad);
+      FAIL() << "no error; expected one naming " << words;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  ParticlePartition short_one = partition;
+  short_one.part_of_particle.pop_back();
+  expect_parts_error(short_one, "the partition is of 9 particles, the graph has 10");
+  ParticlePartition left_out = partition;
+  left_out.part_of_particle[5] = ParticlePartition::kNoPart;
+  expect_parts_error(left_out, "movable particle 5 is in no part");
+  ParticlePartition past_count = partition;
+  past_count.part_of_particle[5] = 3;
+  expect_parts_error(past_count, "movable particle 5 is in part 3 of 3");
 }
 
 TEST(Balance, EvensOutColourSizesWithoutAddingColours) {

@@ -270,6 +270,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     settings.block_size = in.byte() % 20;
     settings.hybrid_threshold = in.byte() % 20;
     if (in.byte() >= 240) settings.gravity = Vector3r(in.value(), in.value(), in.value());
+    // Part-major over the colouring's parts, or runs of its particle order (a part size only
+    // where it sizes runs: any other is InvalidInput).
+    settings.sweep_order = in.byte() % 2 ? SweepOrder::part_major : SweepOrder::colour_major;
+    settings.particles_per_part = in.byte() % 8;
 
     const Colouring colouring = registry.get(strategy).colour(constraint_graph(model), options);
     Solver solver(std::move(model), colouring, settings);

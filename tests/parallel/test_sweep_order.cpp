@@ -127,12 +127,34 @@ TEST(SweepOrder, AColouringWithoutPartsSweepsRunsOfItsParticleOrder) {
     EXPECT_EQ(solver.statistics().part_constraints, interior);
     EXPECT_GT(interior, graph.constraint_count() / 2);
   }
-  // One part holding every movable particle: colour-major's sweep, bit for bit.
-  SolverSettings whole = settings_with(SweepOrder::part_major, 2);
-  whole.particles_per_part = movable;
+  // One part holding every movable particle (exactly, or with room to spare): colour-major's
+  // sweep, bit for bit.
+  for (const std::size_t per_part : {movable, 10 * movable}) {
+    SolverSettings whole = settings_with(SweepOrder::part_major, 2);
+    whole.particles_per_part = per_part;
+    EXPECT_TRUE(test::same_bits(
+        after_steps(cloth, stencil, whole, 3),
+        after_steps(cloth, stencil, settings_with(SweepOrder::colour_major, 2), 3)))
+        << per_part << " per part";
+    EXPECT_EQ(Solver(cloth, stencil, whole).statistics().part_count, 1u);
+  }
+}
+
+TEST(SweepOrder, WithoutMovableParticlesThereAreNoPartsAndNothingMoves) {
+  // Every particle static: no runs, every constraint in the phases, the colour-major bits.
+  Model pinned = test::cloth_model(12, 10);
+  for (std::size_t p = 0; p < pinned.particles.size(); ++p) pinned.particles.inverse_mass[p] = 0;
+  const Colouring colouring = test::colour_model(pinned, "greedy");
+  const Solver solver(pinned, colouring, settings_with(SweepOrder::part_major, 2));
+  EXPECT_EQ(solver.statistics().part_count, 0u);
+  EXPECT_EQ(solver.statistics().part_constraints, 0u);
+  const auto part_major = after_steps(pinned, colouring, settings_with(SweepOrder::part_major, 2), 2);
   EXPECT_TRUE(test::same_bits(
-      after_steps(cloth, stencil, whole, 3),
-      after_steps(cloth, stencil, settings_with(SweepOrder::colour_major, 2), 3)));
+      part_major, after_steps(pinned, colouring, settings_with(SweepOrder::colour_major, 2), 2)));
+  for (std::size_t p = 0; p < pinned.particles.size(); ++p)
+    EXPECT_TRUE(test::same_bits(std::vector<Vector3r>{part_major[p]},
+                                std::vector<Vector3r>{pinned.particles.position(p)}))
+        << "particle " << p;
 }
 
 TEST(SweepOrder, EveryConstraintIsInAPartOrAPhaseAndTheStatisticsSaySo) {
@@ -178,21 +200,27 @@ TEST(SweepOrder, PartMajorConvergesLikeColourMajor) {
 }
 
 TEST(SweepOrder, StaticParticlesStayPutAndHybridRunsTheSmallCrossingColoursAsJacobi) {
+  // METIS's parts, and runs of 96 particles of a colouring without parts.
   const Model cloth = test::cloth_model(32, 24);  // pinned at two corners
-  const Colouring colouring = part_colouring(cloth, 96);
-  SolverSettings settings = settings_with(SweepOrder::part_major, 2);
-  settings.mode = SolverMode::hybrid;
-  settings.hybrid_threshold = 64;
-  Solver solver(cloth, colouring, settings);
-  for (int step = 0; step < 5; ++step) solver.step();
-  const auto positions = solver.positions();
-  for (std::size_t p = 0; p < cloth.particles.size(); ++p)
-    if (cloth.particles.inverse_mass[p] == 0) {
-      EXPECT_TRUE(test::same_bits(std::vector<Vector3r>{positions[p]},
-                                  std::vector<Vector3r>{cloth.particles.position(p)}))
-          << "particle " << p;
-    }
-  EXPECT_GT(solver.statistics().jacobi_constraints, 0u);
+  const Colouring metis = part_colouring(cloth, 96);
+  const Colouring greedy = test::colour_model(cloth, "greedy");
+  for (const Colouring* colouring : {&metis, &greedy}) {
+    SolverSettings settings = settings_with(SweepOrder::part_major, 2);
+    settings.mode = SolverMode::hybrid;
+    settings.hybrid_threshold = 64;
+    if (!colouring->has_parts()) settings.particles_per_part = 96;
+    Solver solver(cloth, *colouring, settings);
+    for (int step = 0; step < 5; ++step) solver.step();
+    const auto positions = solver.positions();
+    for (std::size_t p = 0; p < cloth.particles.size(); ++p)
+      if (cloth.particles.inverse_mass[p] == 0) {
+        EXPECT_TRUE(test::same_bits(std::vector<Vector3r>{positions[p]},
+                                    std::vector<Vector3r>{cloth.particles.position(p)}))
+            << "particle " << p;
+      }
+    EXPECT_GE(solver.statistics().part_count, 4u);
+    EXPECT_GT(solver.statistics().jacobi_constraints, 0u);
+  }
 }
 
 TEST(SweepOrder, WrongUseIsAClearError) {
@@ -220,6 +248,13 @@ TEST(SweepOrder, WrongUseIsAClearError) {
   expect_error([&] { lying.set_parts({0, 1}, 2); }, "parts name 2 constraints");
   expect_error([&] { lying.set_parts(std::vector<std::uint32_t>(lying.constraint_count(), 5), 2); },
                "in part 5 of 2");
+  // A part size that would size nothing: a colour-major sweep, or a colouring with parts.
+  SolverSettings sized = settings_with(SweepOrder::colour_major, 1);
+  sized.particles_per_part = 64;
+  expect_error([&] { Solver(cloth, test::colour_model(cloth, "greedy"), sized); },
+               "this sweep is colour-major");
+  sized.sweep_order = SweepOrder::part_major;
+  expect_error([&] { Solver(cloth, metis, sized); }, "this colouring has its own parts");
   // A phase hook needs phase boundaries.
   Solver solver(cloth, metis, settings_with(SweepOrder::part_major, 1));
   expect_error([&] { solver.set_phase_hook([](std::size_t, ParticleArrays) {}); }, "part-major");

@@ -126,7 +126,7 @@ TEST_F(Cli, ParticleLayoutChangesTheSweepsButNotTheResult) {
   EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
 }
 
-TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountAndNeedsParts) {
+TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountOverAnyColouring) {
   const std::vector<std::string> part_major = {"run", "cloth:40", "--frames", "3",
                                                "--strategy", "metis", "--particles-per-part",
                                                "200", "--sweep-order", "part-major"};
@@ -181,8 +181,8 @@ TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountAndNeedsParts) {
   expect_clear_error({"run", "cloth:12", "--frames", "1", "--sweep-order", "diagonal"},
                      "unknown sweep order 'diagonal'");
   expect_clear_error({"run", "cloth:12", "--frames", "1", "--particles-per-part", "64"},
-                     "strategy stencil has no parts (strategies metis and blocks have), and the "
-                     "sweep order is not part-major");
+                     "needs a strategy with parts (metis or blocks) or --sweep-order "
+                     "part-major (strategy stencil has none)");
 }
 
 TEST_F(Cli, RunSummaryHoldsEveryKey) {
@@ -524,7 +524,7 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
       {{"run", "--sequential-order", "random"}, "tessera run: unknown sequential order 'random' (known: groups, input)"},
       {{"run", "--divergence-rms", "0"}, "tessera run: --divergence-rms: must be a number above 0 or inf, not '0'"},
       {{"run", "--strategy", "nope"}, "tessera run: unknown colouring strategy 'nope' " + strategies},
-      {{"run", "--particles-per-part", "64"}, "tessera run: --particles-per-part: strategy stencil has no parts (strategies metis and blocks have), and the sweep order is not part-major"},
+      {{"run", "--particles-per-part", "64"}, "tessera run: --particles-per-part: needs a strategy with parts (metis or blocks) or --sweep-order part-major (strategy stencil has none)"},
       {{"run", "--pins", "left"}, "tessera run: --pins: unknown pin rule 'left' (known: default, none, lowest-x, lowest-y, lowest-z, highest-x, highest-y, highest-z)"},
       {{"run", "--bending", "floppy"}, "tessera run: --bending: unknown value 'floppy' (known: dihedral, isometric, none)"},
       {{"run", "--shell-material", "silk"}, "tessera run: --shell-material: unknown value 'silk' (known: distance, strain_triangle, fem_triangle)"},

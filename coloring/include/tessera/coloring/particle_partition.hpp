@@ -22,7 +22,8 @@ struct ParticlePartition {
   std::vector<std::uint32_t> part_of_particle;
 };
 
-/// The part strategies' default part size (metis and blocks), in movable particles. Chosen for
+/// The default part size, in movable particles: of the part strategies (metis and blocks), and
+/// of the runs a part-major sweep makes of a colouring without parts. Chosen for
 /// metis by measurement (bench_coloring, coloring/metis/<mesh>/particles_per_part:<k>, 1024² cloth
 /// with bending and a 2.2 M-constraint tet bar): parts of 1,024 / 4,096 / 16,384 / 65,536 particles
 /// gave 23 / 24 / 23 / 23 colours on the cloth and 48 / 47 / 47 / 46 on the tet bar, a mean
@@ -34,6 +35,14 @@ struct ParticlePartition {
 /// "Parts without METIS").
 inline constexpr std::size_t kDefaultParticlesPerPart = 65536;
 
+/// How many parts hold `movable` particles at most `particles_per_part` each (0:
+/// kDefaultParticlesPerPart): ⌈movable / particles_per_part⌉, 0 for no movable particle.
+inline std::size_t part_count_for(std::size_t movable, std::size_t particles_per_part) {
+  const std::size_t per_part =
+      particles_per_part != 0 ? particles_per_part : kDefaultParticlesPerPart;
+  return movable / per_part + (movable % per_part != 0);
+}
+
 /// Splits the movable particles into `part_count` parts with METIS_PartGraphKway (seeded with
 /// `seed`, so repeatable). Handles what METIS 5.1 does not: part_count 0 or 1, graphs with
 /// fewer movable particles than parts, and graphs without edges, by contiguous blocks.
@@ -42,7 +51,8 @@ ParticlePartition partition_particles(const ConstraintGraph& graph, std::size_t 
 
 /// Splits the movable particles, in index order, into `part_count` runs of consecutive
 /// indices (sizes differing by at most one; fewer parts when there are fewer movable
-/// particles): linear, no partitioner. The parts are as compact as the numbering is.
+/// particles, one when part_count is 0; none without movable particles): linear, no
+/// partitioner. The parts are as compact as the numbering is.
 ParticlePartition partition_particles_in_blocks(const ConstraintGraph& graph,
                                                 std::size_t part_count);
 
@@ -58,7 +68,8 @@ ParticlePartition partition_particles_in_runs(const ConstraintGraph& graph,
 /// partition.part_count when they are in several parts or it has none (a crossing constraint,
 /// for the colour phases of a part-major sweep). Static particles belong to no part and do not
 /// make a constraint crossing: a sweep only reads them. Parallel; the same for any thread
-/// count.
+/// count. Throws tessera::InvalidInput when the partition is of another number of particles,
+/// or leaves a movable particle without a part or in one past its count.
 std::vector<std::uint32_t> constraint_parts(const ConstraintGraph& graph,
                                             const ParticlePartition& partition);
 

@@ -171,8 +171,9 @@ struct SolverSettings {
   /// How the sweeps hold the particles (solver_mode.hpp); the same bits either way.
   ParticleLayout particle_layout = kDefaultParticleLayout;
   /// Modes gs and hybrid: colour after colour, or part after part (solver_mode.hpp): the
-  /// colouring's parts (strategies metis and blocks), or for any other colouring runs of
-  /// particles_per_part movable particles of its particle order (0: kDefaultParticlesPerPart).
+  /// colouring's parts (strategies metis and blocks, sized by their ColouringOptions), or for
+  /// any other colouring runs of particles_per_part movable particles of its particle order (0:
+  /// kDefaultParticlesPerPart; set only for those runs, InvalidInput otherwise).
   SweepOrder sweep_order = SweepOrder::colour_major;
   std::size_t particles_per_part = 0;
   /// Consecutive coloured phases run in one parallel region per iteration, the threads

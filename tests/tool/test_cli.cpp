@@ -127,14 +127,16 @@ TEST_F(Cli, ParticleLayoutChangesTheSweepsButNotTheResult) {
 }
 
 TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountOverAnyColouring) {
-  const std::vector<std::string> part_major = {"run", "cloth:40", "--frames", "3",
-                                               "--strategy", "metis", "--particles-per-part",
-                                               "200", "--sweep-order", "part-major"};
-  auto two = part_major;
-  two.insert(two.end(), {"--threads", "2"});
-  auto one = part_major;
-  one.insert(one.end(), {"--threads", "1"});
-  const Json a = run_json(one), b = run_json(two);
+  // A part-major run of cloth:40 (1,598 movable particles) in parts of 200, on 1 and 2 threads.
+  const auto on_one_and_two_threads = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), {"run", "cloth:40", "--frames", "3", "--particles-per-part", "200",
+                               "--sweep-order", "part-major"});
+    auto two = args;
+    args.insert(args.end(), {"--threads", "1"});
+    two.insert(two.end(), {"--threads", "2"});
+    return std::pair{run_json(args), run_json(two)};
+  };
+  const auto [a, b] = on_one_and_two_threads({"--strategy", "metis"});
   EXPECT_EQ(a["sweep_order"], "part-major");
   EXPECT_GE(a["parts"].get<int>(), 4);
   EXPECT_EQ(a["state_hash"], b["state_hash"]);
@@ -144,31 +146,14 @@ TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountOverAnyColouring) {
   EXPECT_NE(colour_major["state_hash"], a["state_hash"]) << "another Gauss-Seidel order";
   // Parts from runs of the numbering (strategy blocks): the same for any thread count, and
   // other parts than METIS's, so other bits.
-  std::vector<std::string> blocks = {"run", "cloth:40", "--frames", "3",
-                                     "--strategy", "blocks", "--particles-per-part",
-                                     "200", "--sweep-order", "part-major"};
-  auto blocks_two = blocks;
-  blocks.insert(blocks.end(), {"--threads", "1"});
-  blocks_two.insert(blocks_two.end(), {"--threads", "2"});
-  const Json c = run_json(blocks), d = run_json(blocks_two);
+  const auto [c, d] = on_one_and_two_threads({"--strategy", "blocks"});
   EXPECT_EQ(c["strategy"], "blocks");
   EXPECT_EQ(c["parts"].get<int>(), 8) << "1,598 movable particles in parts of 200 at most";
   EXPECT_EQ(c["state_hash"], d["state_hash"]);
   EXPECT_NE(c["state_hash"], a["state_hash"]);
-  const auto expect_clear_error = [&](const std::vector<std::string>& args, const char* words) {
-    const Outcome bad = run(args);
-    EXPECT_EQ(bad.exit_code, 2) << bad.err;
-    EXPECT_NE(bad.err.find(words), std::string::npos) << bad.err;
-    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
-  };
-  // The default colouring (stencil) has no parts: runs of its particle order, here of 200
-  // movable particles (cloth:40 pins 2 of 1,600).
-  std::vector<std::string> runs = {"run", "cloth:40", "--frames", "3", "--sweep-order",
-                                   "part-major", "--particles-per-part", "200"};
-  auto runs_two = runs;
-  runs.insert(runs.end(), {"--threads", "1"});
-  runs_two.insert(runs_two.end(), {"--threads", "2"});
-  const Json e = run_json(runs), f = run_json(runs_two);
+  // The default colouring (stencil) has no parts: runs of 200 movable particles of its
+  // particle order.
+  const auto [e, f] = on_one_and_two_threads({});
   EXPECT_EQ(e["strategy"], "stencil");
   EXPECT_EQ(e["parts"].get<int>(), 8);
   EXPECT_GT(e["part_constraints"].get<int>(), e["constraints"].get<int>() / 2);
@@ -178,6 +163,12 @@ TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountOverAnyColouring) {
   EXPECT_EQ(stencil["parts"].get<int>(), 0);
   EXPECT_EQ(stencil["part_constraints"].get<int>(), 0);
   EXPECT_NE(stencil["state_hash"], e["state_hash"]);
+  const auto expect_clear_error = [&](const std::vector<std::string>& args, const char* words) {
+    const Outcome bad = run(args);
+    EXPECT_EQ(bad.exit_code, 2) << bad.err;
+    EXPECT_NE(bad.err.find(words), std::string::npos) << bad.err;
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  };
   expect_clear_error({"run", "cloth:12", "--frames", "1", "--sweep-order", "diagonal"},
                      "unknown sweep order 'diagonal'");
   expect_clear_error({"run", "cloth:12", "--frames", "1", "--particles-per-part", "64"},

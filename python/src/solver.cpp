@@ -290,6 +290,9 @@ void bind_solver(py::module_& m) {
             d["coloured_phases"] = st.coloured_phases;
             d["phase_sizes"] = st.phase_sizes;
             d["jacobi_constraints"] = st.jacobi_constraints;
+            // Part-major: the parts the sweep ran and the constraints they held (0 otherwise).
+            d["parts"] = st.part_count;
+            d["part_constraints"] = st.part_constraints;
             d["threads"] = st.threads;
             d["seconds_schedule"] = st.seconds_schedule;
             d["seconds_projection"] = st.seconds_projection;

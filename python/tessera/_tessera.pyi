@@ -63,6 +63,8 @@ class SolverStatistics(TypedDict):
     coloured_phases: int
     phase_sizes: list[int]
     jacobi_constraints: int
+    parts: int
+    part_constraints: int
     threads: int
     seconds_schedule: float
     seconds_projection: float

@@ -51,6 +51,9 @@ def test_part_major_sweeps_as_the_tool_does_for_any_thread_count(tool):
                 | settings))
             solver.step(3)
             found.add(solver.state_hash())
+            statistics = solver.statistics
+            assert statistics["parts"] >= 4
+            assert 0 < statistics["part_constraints"] < statistics["constraints"]
         return found
 
     metis = tessera.colour(scene.model, "metis", locality=True, particles_per_part=256)

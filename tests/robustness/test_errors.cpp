@@ -314,6 +314,22 @@ TEST(ErrorCatalogue, OtherSolverSettings) {
             "solver settings: gravity is not finite");
 }
 
+TEST(ErrorCatalogue, PartSizeThatSizesNothing) {
+  // SolverSettings::particles_per_part sizes only the runs of a part-major sweep of a
+  // colouring without parts.
+  const Model model = test::cloth_model(3, 3);
+  SolverSettings settings;
+  settings.particles_per_part = 4;
+  EXPECT_EQ(invalid_input([&] { Solver(model, test::colour_model(model), settings); }),
+            "schedule: particles per part sizes the runs a part-major sweep makes of a "
+            "colouring without parts; this sweep is colour-major");
+  settings.sweep_order = SweepOrder::part_major;
+  EXPECT_EQ(invalid_input([&] { Solver(model, test::colour_model(model, "blocks"), settings); }),
+            "schedule: particles per part sizes the runs a part-major sweep makes of a "
+            "colouring without parts; this colouring has its own parts (its strategy's "
+            "particles per part sizes them)");
+}
+
 TEST(ErrorCatalogue, BatchBuiltForAnotherModel) {
   Model model = test::cloth_model(3, 3);
   std::vector<Vector3r> more(12, Vector3r::Zero());

@@ -276,7 +276,8 @@ void Schedule::place_by_part(const ConstraintGraph& graph, const Colouring& colo
     for (Colour k = 0; k < colouring.colour_count(); ++k)
       for (const ConstraintIndex c : colouring.constraints_of(k)) by_part[cursor[part_of[c]]++] = c;
   }
-  // Calls place(members, size) for each colour's run of part b's members, in colour order.
+  // For each colour's run of part b's members, in colour order: the run split by family into
+  // `members`, then place(the run's size).
   SourceLists members;
   const auto for_each_colour_of = [&](std::size_t b, auto&& place) {
     for (std::uint32_t i = part_start[b]; i < part_start[b + 1];) {

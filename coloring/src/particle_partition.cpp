@@ -44,6 +44,16 @@ void contiguous_blocks(ParticlePartition& partition, const std::vector<ParticleI
     partition.part_of_particle[movable[i]] = static_cast<std::uint32_t>(i * part_count / movable.size());
 }
 
+/// Runs of the movable particles in the order `movable` lists them.
+ParticlePartition runs_of(const ConstraintGraph& graph, const std::vector<ParticleIndex>& movable,
+                          std::size_t part_count) {
+  ParticlePartition partition;
+  partition.part_of_particle.assign(graph.particle_count(), ParticlePartition::kNoPart);
+  if (movable.empty()) return partition;
+  contiguous_blocks(partition, movable, std::clamp<std::size_t>(part_count, 1, movable.size()));
+  return partition;
+}
+
 }  // namespace
 
 ParticlePartition partition_particles(const ConstraintGraph& graph, std::size_t part_count,
@@ -122,19 +132,6 @@ ParticlePartition partition_particles(const ConstraintGraph& graph, std::size_t 
     partition.part_of_particle[movable[i]] = static_cast<std::uint32_t>(part[i]);
   return partition;
 }
-
-namespace {
-
-ParticlePartition runs_of(const ConstraintGraph& graph, const std::vector<ParticleIndex>& movable,
-                          std::size_t part_count) {
-  ParticlePartition partition;
-  partition.part_of_particle.assign(graph.particle_count(), ParticlePartition::kNoPart);
-  if (movable.empty()) return partition;
-  contiguous_blocks(partition, movable, std::clamp<std::size_t>(part_count, 1, movable.size()));
-  return partition;
-}
-
-}  // namespace
 
 ParticlePartition partition_particles_in_blocks(const ConstraintGraph& graph,
                                                 std::size_t part_count) {

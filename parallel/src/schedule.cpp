@@ -51,6 +51,28 @@ ScheduleOptions checked(ScheduleOptions options) {
   return options;
 }
 
+/// A colouring's parts run at the same time, so its claim that a part's interior constraints
+/// share no movable particle with another part's is checked, not trusted: a wrong claim would
+/// be a race.
+void check_claimed_parts(const ConstraintGraph& graph, std::span<const std::uint32_t> part_of,
+                         std::size_t parts) {
+  constexpr std::uint32_t kNoOwner = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> owner(graph.particle_count(), kNoOwner);
+  for (ConstraintIndex c = 0; c < graph.constraint_count(); ++c) {
+    const std::uint32_t part = part_of[c];
+    if (part == parts) continue;
+    for (const ParticleIndex p : graph.particles_of(c)) {
+      if (owner[p] == kNoOwner) owner[p] = part;
+      else if (owner[p] != part)
+        throw InvalidInput("schedule: the colouring puts constraint " + std::to_string(c) +
+                           " in part " + std::to_string(part) + ", but its particle " +
+                           std::to_string(p) + " is in part " + std::to_string(owner[p]) +
+                           " (a part's constraints may share movable particles with no other "
+                           "part's)");
+    }
+  }
+}
+
 }  // namespace
 
 namespace detail {
@@ -109,23 +131,23 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
                         : "this colouring has its own parts (its strategy's particles per part "
                           "sizes them)"));
   if (options_.sweep_order == SweepOrder::part_major && colouring->has_parts()) {
-    place_by_part(constraint_graph(model), *colouring, colouring->part_of_constraint(),
-                  colouring->part_count(), coloured_source, jacobi_source);
+    const ConstraintGraph graph = constraint_graph(model);
+    check_claimed_parts(graph, colouring->part_of_constraint(), colouring->part_count());
+    place_by_part(*colouring, colouring->part_of_constraint(), colouring->part_count(),
+                  coloured_source, jacobi_source);
   } else if (options_.sweep_order == SweepOrder::part_major) {
     // Parts of the colouring's own particle order: any colouring keeps its guarantee within a
     // part, and the schedule lays the particles out in that order, so a run of it is a
     // contiguous range of the particle arrays (and, with the locality pass, a compact piece of
-    // the mesh).
+    // the mesh). Made here, so they need no check (constraint_parts puts a constraint in a
+    // part only when all its movable particles are there).
     const ConstraintGraph graph = constraint_graph(model);
-    std::vector<ParticleIndex> identity;
-    if (new_to_old_.empty()) {
-      identity.resize(particle_count);
-      for (std::size_t p = 0; p < particle_count; ++p) identity[p] = ParticleIndex(p);
-    }
-    const ParticlePartition partition = partition_particles_in_runs(
-        graph, new_to_old_.empty() ? std::span<const ParticleIndex>(identity) : new_to_old_,
-        part_count_for(graph.movable_particle_count(), options_.particles_per_part));
-    place_by_part(graph, *colouring, constraint_parts(graph, partition), partition.part_count,
+    const std::size_t parts =
+        part_count_for(graph.movable_particle_count(), options_.particles_per_part);
+    const ParticlePartition partition =
+        new_to_old_.empty() ? partition_particles_in_blocks(graph, parts)
+                            : partition_particles_in_runs(graph, new_to_old_, parts);
+    place_by_part(*colouring, constraint_parts(graph, partition), partition.part_count,
                   coloured_source, jacobi_source);
   } else {
     place_by_colour(*colouring, coloured_source, jacobi_source);
@@ -243,27 +265,9 @@ void Schedule::place_by_colour(const Colouring& colouring, SourceLists& coloured
 }
 
 // Part-major: every part's interior constraints colour after colour (one block per colour and
-// family: the part is one worker's), then the crossing constraints as colour phases. A part's
-// blocks run while other parts' run, so the colouring's claim that its interior constraints
-// share no movable particle with another part's is checked here: a wrong claim would be a race.
-void Schedule::place_by_part(const ConstraintGraph& graph, const Colouring& colouring,
-                             std::span<const std::uint32_t> part_of, std::size_t parts,
-                             SourceLists& coloured, SourceLists& jacobi) {
-  constexpr std::uint32_t kNoOwner = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> owner(graph.particle_count(), kNoOwner);
-  for (ConstraintIndex c = 0; c < constraint_count(); ++c) {
-    const std::uint32_t part = part_of[c];
-    if (part == parts) continue;
-    for (const ParticleIndex p : graph.particles_of(c)) {
-      if (owner[p] == kNoOwner) owner[p] = part;
-      else if (owner[p] != part)
-        throw InvalidInput("schedule: the colouring puts constraint " + std::to_string(c) +
-                           " in part " + std::to_string(part) + ", but its particle " +
-                           std::to_string(p) + " is in part " + std::to_string(owner[p]) +
-                           " (a part's constraints may share movable particles with no other "
-                           "part's)");
-    }
-  }
+// family: the part is one worker's), then the crossing constraints as colour phases.
+void Schedule::place_by_part(const Colouring& colouring, std::span<const std::uint32_t> part_of,
+                             std::size_t parts, SourceLists& coloured, SourceLists& jacobi) {
   // Each part's members colour after colour, then the crossing ones (part `parts`): a stable
   // counting sort by part of the constraints in colour order (memory linear in the
   // constraints and parts, not their product: parts may be as small as one particle).

@@ -202,9 +202,8 @@ class Schedule {
   void take_particle_order(const Colouring& colouring, std::size_t particle_count);
   void place_by_colour(const Colouring& colouring, SourceLists& coloured, SourceLists& jacobi);
   /// part_of[c]: constraint c's part, or `parts` for a crossing one.
-  void place_by_part(const ConstraintGraph& graph, const Colouring& colouring,
-                     std::span<const std::uint32_t> part_of, std::size_t parts,
-                     SourceLists& coloured, SourceLists& jacobi);
+  void place_by_part(const Colouring& colouring, std::span<const std::uint32_t> part_of,
+                     std::size_t parts, SourceLists& coloured, SourceLists& jacobi);
   /// members[f] = the constraints (global ids) of family f, as indices within the family.
   void split_by_family(std::span<const ConstraintIndex> constraints, SourceLists& members) const;
   /// Appends one colour's (or one part's colour's) constraints, per family, to the coloured

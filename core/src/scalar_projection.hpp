@@ -19,8 +19,8 @@ void write_corrections(const lanes::Vec3<Real> (&lane_corr)[N], Vector3r* const 
 }
 
 /// PBD projection of one lane (stiffness semantics); true when the lane was projected.
-template <int N>
-bool project_scalar_pbd(const lanes::ConstraintValue<Real, N>& value, const Real (&w)[N],
+template <int N, class Value>
+bool project_scalar_pbd(const Value& value, const Real (&w)[N],
                         Real stiffness, Vector3r* const (&corr)[N]) {
   lanes::Vec3<Real> lane_corr[N];
   const bool projected = lanes::project_pbd(value, w, stiffness, lane_corr);
@@ -29,8 +29,8 @@ bool project_scalar_pbd(const lanes::ConstraintValue<Real, N>& value, const Real
 }
 
 /// XPBD projection of one lane (compliance semantics, updates λ); true when projected.
-template <int N>
-bool project_scalar_xpbd(const lanes::ConstraintValue<Real, N>& value, const Real (&w)[N],
+template <int N, class Value>
+bool project_scalar_xpbd(const Value& value, const Real (&w)[N],
                          Real compliance, Real dt, Real& lambda, Vector3r* const (&corr)[N]) {
   lanes::Vec3<Real> lane_corr[N];
   const bool projected = lanes::project_xpbd(value, w, compliance, dt, lambda, lane_corr);

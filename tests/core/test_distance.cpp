@@ -1,8 +1,15 @@
 // Tests of the distance constraint, PBD and XPBD forms: known answers, momentum, static
 // particles, rigid-motion invariance, the direction of the correction against a
-// finite-difference gradient, one-step satisfaction, degenerate input and the XPBD multiplier.
+// finite-difference gradient, one-step satisfaction, degenerate input and the XPBD multiplier;
+// and the one-division rule distance constraints are projected by (DirectionValue) against the
+// general rule with n = d/|d|.
+#include <limits>
+
 #include <tessera/core/position_based_dynamics.hpp>
 #include <tessera/core/xpbd.hpp>
+
+// The lane formula itself, compiled here for the static SIMD target only, on one lane.
+#include "../../core/src/kernels/distance-inl.h"
 
 #include "test_support.hpp"
 
@@ -224,6 +231,92 @@ TEST(XPBDDistanceConstraint, StaticParticleIsNeverMoved) {
 TEST(DistanceConstraint, NearDegenerateInputStaysFinite) {
   expect_near_degenerate_input_stays_finite<2>(
       106, 1, [](Random& random) { return random.uniform(0, 1); }, project, project_xpbd);
+}
+
+namespace lanes = HWY_NAMESPACE;
+
+/// The general rule's value of the same constraint: gradients n = d/|d| and −n.
+lanes::ConstraintValue<Real, 2> general_value(const lanes::DirectionValue<Real>& value) {
+  lanes::ConstraintValue<Real, 2> general;
+  general.C = value.C;
+  general.valid = value.valid;
+  const lanes::Vec3<Real> n =
+      value.difference * (value.valid ? Real(1) / value.length : Real(0));
+  general.gradient[0] = n;
+  general.gradient[1] = -n;
+  return general;
+}
+
+Vector3r correction(const lanes::Vec3<Real>& corr) { return lanes::to_eigen(corr); }
+
+TEST(DistanceConstraint, OneDivisionRuleMatchesTheGeneralRule) {
+  // Both semantics over random pairs, masses (one static at times), compliances and
+  // multipliers: the same corrections and λ as the general rule up to rounding.
+  Random random(17);
+  for (int trial = 0; trial < 500; ++trial) {
+    const Points x = {random.vector(), random.vector()};
+    const Real w[2] = {trial % 5 == 0 ? Real(0) : random.inverse_mass(), random.inverse_mass()};
+    const Real rest = random.uniform(Real(0.1), Real(2));
+    const auto value = lanes::distance_constraint<Real>(lanes::from_eigen(x[0]),
+                                                        lanes::from_eigen(x[1]), rest);
+    ASSERT_TRUE(value.valid);
+    const auto general = general_value(value);
+    const Real tolerance = kRoundOff;
+
+    const Real stiffness = random.uniform(Real(0.1), Real(1));
+    lanes::Vec3<Real> by_direction[2], by_general[2];
+    EXPECT_TRUE(lanes::project_pbd(value, w, stiffness, by_direction));
+    EXPECT_TRUE(lanes::project_pbd(general, w, stiffness, by_general));
+    for (int i = 0; i < 2; ++i)
+      EXPECT_TRUE(near_relative(correction(by_direction[i]), correction(by_general[i]), tolerance))
+          << "PBD, particle " << i << ", trial " << trial;
+
+    const Real compliance = trial % 3 == 0 ? Real(0) : random.uniform(Real(1e-6), Real(1e-2));
+    const Real dt = random.uniform(Real(1e-3), Real(1e-1));
+    Real lambda_direction = random.uniform(Real(-1), Real(1)), lambda_general = lambda_direction;
+    EXPECT_TRUE(lanes::project_xpbd(value, w, compliance, dt, lambda_direction, by_direction));
+    EXPECT_TRUE(lanes::project_xpbd(general, w, compliance, dt, lambda_general, by_general));
+    EXPECT_NEAR(lambda_direction, lambda_general, tolerance * (1 + std::abs(lambda_general)))
+        << "trial " << trial;
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_TRUE(near_relative(correction(by_direction[i]), correction(by_general[i]), tolerance))
+          << "XPBD, particle " << i << ", trial " << trial;
+      if (w[i] == 0) EXPECT_EQ(correction(by_direction[i]), Vector3r::Zero()) << "static particle";
+    }
+  }
+}
+
+TEST(DistanceConstraint, OneDivisionRuleLeavesInvalidLanesAlone) {
+  // Coincident points, two static particles, a NaN position, a non-positive time step or a
+  // negative compliance: no correction, λ keeps its bits (a NaN |d| must not reach it).
+  const Real nan = std::numeric_limits<Real>::quiet_NaN();
+  struct Case {
+    const char* what;
+    Points x;
+    Real w0, w1, compliance, dt;
+  };
+  const Case cases[] = {
+      {"coincident", {Vector3r(1, 2, 3), Vector3r(1, 2, 3)}, 1, 1, 0, Real(0.01)},
+      {"both static", {Vector3r(0, 0, 0), Vector3r(2, 0, 0)}, 0, 0, 0, Real(0.01)},
+      {"NaN position", {Vector3r(nan, 0, 0), Vector3r(2, 0, 0)}, 1, 1, 0, Real(0.01)},
+      {"zero time step", {Vector3r(0, 0, 0), Vector3r(2, 0, 0)}, 1, 1, Real(1e-3), 0},
+      {"negative compliance", {Vector3r(0, 0, 0), Vector3r(2, 0, 0)}, 1, 1, -1, Real(0.01)},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const auto value = lanes::distance_constraint<Real>(lanes::from_eigen(c.x[0]),
+                                                        lanes::from_eigen(c.x[1]), Real(1));
+    const Real w[2] = {c.w0, c.w1};
+    lanes::Vec3<Real> corr[2];
+    Real lambda = Real(0.25);
+    EXPECT_FALSE(lanes::project_xpbd(value, w, c.compliance, c.dt, lambda, corr));
+    EXPECT_EQ(lambda, Real(0.25));
+    for (const auto& v : corr) EXPECT_EQ(correction(v), Vector3r::Zero());
+    if (c.dt > 0 && c.compliance >= 0) {
+      EXPECT_FALSE(lanes::project_pbd(value, w, Real(1), corr));
+      for (const auto& v : corr) EXPECT_EQ(correction(v), Vector3r::Zero());
+    }
+  }
 }
 
 }  // namespace distance_tests

@@ -36,7 +36,8 @@ struct ProjectionParameters {
 };
 
 /// Projects constraints [begin, end) W at a time. evaluate(positions, i) returns the
-/// ConstraintValue<RealLanes, N> of constraints i .. i+W from their N gathered positions
+/// ConstraintValue<RealLanes, N> (or, for N = 2 with gradients ±n, the DirectionValue) of
+/// constraints i .. i+W from their N gathered positions
 /// (rest data of the family is loaded by the caller's lambda at offset i). With stiffness
 /// semantics, stiffness_of(value, i) gives the PBD stiffness of those lanes (a family may
 /// choose it from C, as the proximity families do); compliance semantics use
@@ -61,7 +62,7 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
     Vec3<RealLanes> position[N];
     RealLanes w[N];
     gather_constraint_particles(particles, slot, i, end, gathered, position, w);
-    const ConstraintValue<RealLanes, N> value = evaluate(position, i);
+    const auto value = evaluate(position, i);
     Vec3<RealLanes> corr[N];
     if (compliance) {
       RealLanes lambda = hn::LoadU(d, parameters.lambda + i);
@@ -86,7 +87,7 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   const RealTag d;
   project_constraint_lanes<N>(
       particles, indices, parameters, begin, end, settings, evaluate,
-      [&](const ConstraintValue<RealLanes, N>&, std::size_t i) {
+      [&](const auto&, std::size_t i) {
         return hn::LoadU(d, parameters.stiffness + i);
       });
 }

@@ -19,9 +19,9 @@ namespace tessera {
 namespace HWY_NAMESPACE {
 
 template <class V>
-HWY_INLINE ConstraintValue<V, 2> tether_constraint(const Vec3<V>& p0, const Vec3<V>& p1,
-                                                   V max_distance) {
-  ConstraintValue<V, 2> value = distance_constraint(p0, p1, max_distance);
+HWY_INLINE DirectionValue<V> tether_constraint(const Vec3<V>& p0, const Vec3<V>& p1,
+                                               V max_distance) {
+  DirectionValue<V> value = distance_constraint(p0, p1, max_distance);
   value.valid = mask_and(value.valid, value.C > zero<V>());
   return value;
 }

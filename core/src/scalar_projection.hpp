@@ -33,7 +33,8 @@ template <int N, class Value>
 bool project_scalar_xpbd(const Value& value, const Real (&w)[N],
                          Real compliance, Real dt, Real& lambda, Vector3r* const (&corr)[N]) {
   lanes::Vec3<Real> lane_corr[N];
-  const bool projected = lanes::project_xpbd(value, w, compliance, dt, lambda, lane_corr);
+  const bool projected =
+      lanes::project_xpbd(value, w, compliance, lanes::TimeStep<Real>::of(dt), lambda, lane_corr);
   write_corrections<N>(lane_corr, corr);
   return projected;
 }

@@ -251,7 +251,8 @@ Vector3r correction(const lanes::Vec3<Real>& corr) { return lanes::to_eigen(corr
 
 TEST(DistanceConstraint, OneDivisionRuleMatchesTheGeneralRule) {
   // Both semantics over random pairs, masses (one static at times), compliances and
-  // multipliers: the same corrections and λ as the general rule up to rounding.
+  // multipliers: the same corrections and λ as the general rule up to rounding, and exactly
+  // zero for a static particle.
   Random random(17);
   for (int trial = 0; trial < 500; ++trial) {
     const Points x = {random.vector(), random.vector()};
@@ -261,61 +262,98 @@ TEST(DistanceConstraint, OneDivisionRuleMatchesTheGeneralRule) {
                                                         lanes::from_eigen(x[1]), rest);
     ASSERT_TRUE(value.valid);
     const auto general = general_value(value);
-    const Real tolerance = kRoundOff;
+    const auto static_is_still = [&](const lanes::Vec3<Real> (&corr)[2]) {
+      for (int i = 0; i < 2; ++i)
+        if (w[i] == 0) EXPECT_EQ(correction(corr[i]), Vector3r::Zero()) << "static particle";
+    };
 
     const Real stiffness = random.uniform(Real(0.1), Real(1));
     lanes::Vec3<Real> by_direction[2], by_general[2];
     EXPECT_TRUE(lanes::project_pbd(value, w, stiffness, by_direction));
     EXPECT_TRUE(lanes::project_pbd(general, w, stiffness, by_general));
     for (int i = 0; i < 2; ++i)
-      EXPECT_TRUE(near_relative(correction(by_direction[i]), correction(by_general[i]), tolerance))
+      EXPECT_TRUE(near_relative(correction(by_direction[i]), correction(by_general[i])))
           << "PBD, particle " << i << ", trial " << trial;
+    static_is_still(by_direction);
 
     const Real compliance = trial % 3 == 0 ? Real(0) : random.uniform(Real(1e-6), Real(1e-2));
-    const Real dt = random.uniform(Real(1e-3), Real(1e-1));
+    const auto step = lanes::TimeStep<Real>::of(random.uniform(Real(1e-3), Real(1e-1)));
     Real lambda_direction = random.uniform(Real(-1), Real(1)), lambda_general = lambda_direction;
-    EXPECT_TRUE(lanes::project_xpbd(value, w, compliance, dt, lambda_direction, by_direction));
-    EXPECT_TRUE(lanes::project_xpbd(general, w, compliance, dt, lambda_general, by_general));
-    EXPECT_NEAR(lambda_direction, lambda_general, tolerance * (1 + std::abs(lambda_general)))
+    EXPECT_TRUE(lanes::project_xpbd(value, w, compliance, step, lambda_direction, by_direction));
+    EXPECT_TRUE(lanes::project_xpbd(general, w, compliance, step, lambda_general, by_general));
+    EXPECT_NEAR(lambda_direction, lambda_general, kRoundOff * (1 + std::abs(lambda_general)))
         << "trial " << trial;
-    for (int i = 0; i < 2; ++i) {
-      EXPECT_TRUE(near_relative(correction(by_direction[i]), correction(by_general[i]), tolerance))
+    for (int i = 0; i < 2; ++i)
+      EXPECT_TRUE(near_relative(correction(by_direction[i]), correction(by_general[i])))
           << "XPBD, particle " << i << ", trial " << trial;
-      if (w[i] == 0) EXPECT_EQ(correction(by_direction[i]), Vector3r::Zero()) << "static particle";
-    }
+    static_is_still(by_direction);
   }
 }
 
 TEST(DistanceConstraint, OneDivisionRuleLeavesInvalidLanesAlone) {
-  // Coincident points, two static particles, a NaN position, a non-positive time step or a
-  // negative compliance: no correction, λ keeps its bits (a NaN |d| must not reach it).
+  // Coincident points, two static particles, a NaN or infinite position, a time step that is
+  // zero, negative or NaN, a negative compliance, or a compliance made infinite by a time
+  // step whose square is subnormal or rounds to 0: no correction, and λ keeps its value (a
+  // NaN |d| must not reach it). Both rules, on a sentinel-filled output.
   const Real nan = std::numeric_limits<Real>::quiet_NaN();
+  const Real inf = std::numeric_limits<Real>::infinity();
+  const Real subnormal_square = std::sqrt(std::numeric_limits<Real>::min()) / 4;
+  const Real zero_square = std::sqrt(std::numeric_limits<Real>::denorm_min()) / 4;
   struct Case {
     const char* what;
     Points x;
     Real w0, w1, compliance, dt;
+    bool pbd_invalid;  // whether the stiffness rule (no dt, no α) must refuse it too
   };
+  const Points apart = {Vector3r(0, 0, 0), Vector3r(2, 0, 0)};
   const Case cases[] = {
-      {"coincident", {Vector3r(1, 2, 3), Vector3r(1, 2, 3)}, 1, 1, 0, Real(0.01)},
-      {"both static", {Vector3r(0, 0, 0), Vector3r(2, 0, 0)}, 0, 0, 0, Real(0.01)},
-      {"NaN position", {Vector3r(nan, 0, 0), Vector3r(2, 0, 0)}, 1, 1, 0, Real(0.01)},
-      {"zero time step", {Vector3r(0, 0, 0), Vector3r(2, 0, 0)}, 1, 1, Real(1e-3), 0},
-      {"negative compliance", {Vector3r(0, 0, 0), Vector3r(2, 0, 0)}, 1, 1, -1, Real(0.01)},
+      {"coincident", {Vector3r(1, 2, 3), Vector3r(1, 2, 3)}, 1, 1, 0, Real(0.01), true},
+      {"both static", apart, 0, 0, 0, Real(0.01), true},
+      {"NaN position", {Vector3r(nan, 0, 0), Vector3r(2, 0, 0)}, 1, 1, 0, Real(0.01), true},
+      {"infinite position", {Vector3r(inf, 0, 0), Vector3r(2, 0, 0)}, 1, 1, 0, Real(0.01), true},
+      {"zero time step", apart, 1, 1, Real(1e-3), 0, false},
+      {"negative time step", apart, 1, 1, Real(1e-3), Real(-0.1), false},
+      {"NaN time step", apart, 1, 1, Real(1e-3), nan, false},
+      {"negative compliance", apart, 1, 1, -1, Real(0.01), false},
+      {"subnormal dt²", apart, 1, 1, Real(1e-3), subnormal_square, false},
+      {"dt² rounds to 0", apart, 1, 1, Real(1e-3), zero_square, false},
   };
+  const lanes::Vec3<Real> sentinel{Real(7), Real(7), Real(7)};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.what);
     const auto value = lanes::distance_constraint<Real>(lanes::from_eigen(c.x[0]),
                                                         lanes::from_eigen(c.x[1]), Real(1));
     const Real w[2] = {c.w0, c.w1};
-    lanes::Vec3<Real> corr[2];
+    lanes::Vec3<Real> corr[2] = {sentinel, sentinel};
     Real lambda = Real(0.25);
-    EXPECT_FALSE(lanes::project_xpbd(value, w, c.compliance, c.dt, lambda, corr));
+    const auto step = lanes::TimeStep<Real>::of(c.dt);
+    EXPECT_FALSE(lanes::project_xpbd(value, w, c.compliance, step, lambda, corr));
     EXPECT_EQ(lambda, Real(0.25));
     for (const auto& v : corr) EXPECT_EQ(correction(v), Vector3r::Zero());
-    if (c.dt > 0 && c.compliance >= 0) {
+    if (c.pbd_invalid) {
+      corr[0] = corr[1] = sentinel;
       EXPECT_FALSE(lanes::project_pbd(value, w, Real(1), corr));
       for (const auto& v : corr) EXPECT_EQ(correction(v), Vector3r::Zero());
     }
+  }
+}
+
+TEST(XPBDDistanceConstraint, ZeroComplianceProjectsWhateverThePositiveTimeStep) {
+  // A hard constraint needs no 1/dt²: with a time step whose square is subnormal, rounds to
+  // 0 or is infinite, zero compliance still projects as PBD with stiffness 1 does
+  // (λ = −C/(w0 + w1)); the hand-checked pair of HandCheckedStretchedPair.
+  const Points x = {Vector3r(3, 0, 0), Vector3r(0, 0, 0)};
+  const Real dts[] = {std::sqrt(std::numeric_limits<Real>::min()) / 4,
+                      std::sqrt(std::numeric_limits<Real>::denorm_min()) / 4,
+                      std::numeric_limits<Real>::infinity()};
+  for (const Real dt : dts) {
+    SCOPED_TRACE(dt);
+    Real lambda = 0;
+    const Projection r = project_xpbd(x, {1, 3}, 1, 0, dt, lambda);
+    ASSERT_TRUE(r.ok);
+    EXPECT_TRUE(near_relative(r.corr[0], Vector3r(-0.5, 0, 0)));
+    EXPECT_TRUE(near_relative(r.corr[1], Vector3r(1.5, 0, 0)));
+    EXPECT_NEAR(lambda, Real(-0.5), kRoundOff);
   }
 }
 

@@ -54,7 +54,7 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   const ParticleIndex* slot[N];
   constraint_slots(indices, slot);
   const bool compliance = settings.semantics == ConstraintSemantics::compliance;
-  const RealLanes dt = hn::Set(d, settings.dt);
+  const auto step = TimeStep<RealLanes>::of(hn::Set(d, settings.dt));
   for (std::size_t i = begin; i < end; i += lanes) {
     const std::size_t active_count = end - i;
     const LaneMask active = hn::FirstN(d, active_count);
@@ -66,7 +66,7 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
     Vec3<RealLanes> corr[N];
     if (compliance) {
       RealLanes lambda = hn::LoadU(d, parameters.lambda + i);
-      project_xpbd(value, w, hn::LoadU(d, parameters.compliance + i), dt, lambda, corr);
+      project_xpbd(value, w, hn::LoadU(d, parameters.compliance + i), step, lambda, corr);
       store_active(lambda, active_count, parameters.lambda + i);
     } else {
       project_pbd(value, w, stiffness_of(value, i), corr);

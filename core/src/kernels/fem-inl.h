@@ -207,7 +207,8 @@ HWY_INLINE Mask<V> fem_tetra_xpbd(const Vec3<V> (&p)[4], const V (&w)[4], V volu
   value.C = C;
   for (int i = 0; i < 4; ++i) value.gradient[i] = element.gradient[i] * inverse_C;
   value.valid = mask_and(inputs_valid, has_gradient);
-  const Mask<V> projected = project_xpbd(value, w, compliance, dt, lambda_xpbd, corr);
+  const Mask<V> projected =
+      project_xpbd(value, w, compliance, TimeStep<V>::of(dt), lambda_xpbd, corr);
   return mask_or(projected, mask_and(inputs_valid, mask_not(has_gradient)));
 }
 

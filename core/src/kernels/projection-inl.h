@@ -9,15 +9,17 @@
 // (and an unchanged λ). A static particle (w = 0) always gets exactly zero.
 //
 // α̃ is α · (1/dt²): the reciprocal is the same for every lane and batch, so a loop computes
-// it once and each lane multiplies (a division per lane sat on the projection's path).
+// it once (TimeStep) and each batch multiplies, where it divided per batch before.
 //
 // A two-particle family whose gradients are a unit direction and its opposite (distance,
 // tether: ∇_{p0} C = n = d/|d|, ∇_{p1} C = −n) returns a DirectionValue instead: d and |d|,
 // not n. With |n|² = 1 the rules above become, for the one division they need,
-//   project_pbd:  s = k · C / ((w0 + w1) |d|),               Δp0 = −s w0 d,  Δp1 = s w1 d
-//   project_xpbd: t = (−C − α̃ λ) / ((w0 + w1 + α̃) |d|),   Δλ = t |d|,  Δp0 = t w0 d,  Δp1 = −t w1 d
+//   project_pbd:  s = k · C / ((w0 + w1) |d|),             Δp0 = −s w0 d,  Δp1 = s w1 d
+//   project_xpbd: t = (−C − α̃ λ) / ((w0 + w1 + α̃) |d|),   Δp0 = t w0 d,   Δp1 = −t w1 d,
+//                 Δλ = t |d|
 // (t = Δλ/|d|): the normalisation n = d/|d| and the sum Σ w |∇C|² leave the path from the
-// positions to the corrections, which in the distance kernel was three divisions long.
+// positions to the corrections, which in the distance kernel was a square root and two
+// divisions long (α/dt² was a third division per batch).
 #if defined(TESSERA_CORE_KERNELS_PROJECTION_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef TESSERA_CORE_KERNELS_PROJECTION_INL_H_
 #undef TESSERA_CORE_KERNELS_PROJECTION_INL_H_
@@ -40,7 +42,8 @@ struct ConstraintValue {
 };
 
 /// C of a two-particle constraint whose gradients are ±d/|d| (see the top of this file), and
-/// the lanes where they are defined (|d| not degenerate).
+/// the lanes where they are defined (|d| not degenerate; a family may narrow them, as the
+/// tether does to C > 0).
 template <class V>
 struct DirectionValue {
   V C;
@@ -67,11 +70,35 @@ HWY_INLINE V degenerate_denominator() {
   return splat<V>(double(kDegenerateTolerance) * double(kDegenerateTolerance));
 }
 
-/// α̃ = α · (1/dt²) where valid, 0 elsewhere (1/dt² is invariant in a loop over lanes).
+/// An XPBD projection's time step and 1/dt² (0 where dt is not positive), made once per
+/// loop over batches.
 template <class V>
-HWY_INLINE V scaled_compliance(V compliance, V dt, const Mask<V>& valid) {
-  const V inverse_dt2 = splat<V>(1.0) / select(dt > zero<V>(), dt * dt, splat<V>(1.0));
-  return select(valid, compliance * inverse_dt2, zero<V>());
+struct TimeStep {
+  V dt;
+  V inverse_squared;
+
+  static HWY_INLINE TimeStep of(V dt) {
+    const Mask<V> positive = dt > zero<V>();
+    return {dt, select(positive, splat<V>(1.0) / select(positive, dt * dt, splat<V>(1.0)),
+                       zero<V>())};
+  }
+};
+
+/// α̃ = α · (1/dt²), 0 for α = 0 whatever dt (1/dt² is Inf when dt² underflows); the
+/// projections leave lanes whose α̃ is not finite.
+template <class V>
+HWY_INLINE V scaled_compliance(V compliance, const TimeStep<V>& step) {
+  return select(compliance == zero<V>(), zero<V>(), compliance * step.inverse_squared);
+}
+
+/// The lanes an XPBD projection may project: the formula's valid lanes with a finite C, a
+/// non-degenerate Σ w|∇C|², a positive time step and a compliance ≥ 0 with a finite α̃.
+template <class V>
+HWY_INLINE Mask<V> xpbd_valid(const Mask<V>& formula_valid, V C, V weighted,
+                              const TimeStep<V>& step, V compliance, V alpha_tilde) {
+  return mask_and(
+      mask_and(mask_and(formula_valid, is_finite(C)), weighted > degenerate_denominator<V>()),
+      mask_and(mask_and(step.dt > zero<V>(), compliance >= zero<V>()), is_finite(alpha_tilde)));
 }
 
 template <class V, int N>
@@ -87,12 +114,11 @@ HWY_INLINE Mask<V> project_pbd(const ConstraintValue<V, N>& value, const V (&w)[
 
 template <class V, int N>
 HWY_INLINE Mask<V> project_xpbd(const ConstraintValue<V, N>& value, const V (&w)[N],
-                                V compliance, V dt, V& lambda, Vec3<V> (&corr)[N]) {
+                                V compliance, const TimeStep<V>& step, V& lambda,
+                                Vec3<V> (&corr)[N]) {
   const V weighted = weighted_gradient_norm(value, w);
-  const Mask<V> valid = mask_and(
-      mask_and(mask_and(value.valid, is_finite(value.C)), weighted > degenerate_denominator<V>()),
-      mask_and(dt > zero<V>(), compliance >= zero<V>()));
-  const V alpha_tilde = scaled_compliance(compliance, dt, valid);
+  const V alpha_tilde = scaled_compliance(compliance, step);
+  const Mask<V> valid = xpbd_valid(value.valid, value.C, weighted, step, compliance, alpha_tilde);
   const V delta_lambda =
       safe_divide(zero<V>() - value.C - alpha_tilde * lambda, weighted + alpha_tilde, valid);
   lambda = lambda + delta_lambda;
@@ -114,12 +140,10 @@ HWY_INLINE Mask<V> project_pbd(const DirectionValue<V>& value, const V (&w)[2], 
 
 template <class V>
 HWY_INLINE Mask<V> project_xpbd(const DirectionValue<V>& value, const V (&w)[2], V compliance,
-                                V dt, V& lambda, Vec3<V> (&corr)[2]) {
+                                const TimeStep<V>& step, V& lambda, Vec3<V> (&corr)[2]) {
   const V weighted = w[0] + w[1];
-  const Mask<V> valid = mask_and(
-      mask_and(mask_and(value.valid, is_finite(value.C)), weighted > degenerate_denominator<V>()),
-      mask_and(dt > zero<V>(), compliance >= zero<V>()));
-  const V alpha_tilde = scaled_compliance(compliance, dt, valid);
+  const V alpha_tilde = scaled_compliance(compliance, step);
+  const Mask<V> valid = xpbd_valid(value.valid, value.C, weighted, step, compliance, alpha_tilde);
   const V t = safe_divide(zero<V>() - value.C - alpha_tilde * lambda,
                           (weighted + alpha_tilde) * value.length, valid);
   lambda = lambda + select(valid, t * value.length, zero<V>());

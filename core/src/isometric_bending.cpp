@@ -116,7 +116,8 @@ bool XPBD::solve_IsometricBendingConstraint(const Vector3r& p0, Real invMass0,
   const bool projected = detail::project_scalar_xpbd<4>(value, w, compliance, dt, lambda,
                                                         {&corr0, &corr1, &corr2, &corr3});
   // Flat: satisfied, λ unchanged (but a bad time step or compliance is still an error).
-  return projected || (lanes::bending_is_flat(value) && dt > 0 && compliance >= 0);
+  return projected || (lanes::bending_is_flat(value) &&
+                       lanes::xpbd_inputs_valid(lanes::TimeStep<Real>::of(dt), compliance));
 }
 
 }  // namespace tessera

@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <numeric>
 #include <vector>
@@ -178,6 +179,10 @@ TEST(XpbdResidual, DistanceMeasuresCPlusAlphaTildeLambda) {
   batch.compliance[0] = 0;
   xpbd_residuals(particles, batch, 0, 1, dt, &out);
   EXPECT_NEAR(out, Real(0.1), kResidualTolerance) << "a hard constraint: the violation";
+  // A time step so small that 1/dt² overflows: a hard constraint is still its violation, as
+  // the projection still projects it (α̃ = 0 for α = 0), not NaN.
+  xpbd_residuals(particles, batch, 0, 1, std::sqrt(std::numeric_limits<Real>::min()) / 4, &out);
+  EXPECT_NEAR(out, Real(0.1), kResidualTolerance) << "a hard constraint, tiny dt";
 }
 
 /// Converging one compliant constraint by repeated XPBD projections drives the XPBD residual

@@ -294,7 +294,8 @@ TEST(DistanceConstraint, OneDivisionRuleLeavesInvalidLanesAlone) {
   // Coincident points, two static particles, a NaN or infinite position, a time step that is
   // zero, negative or NaN, a negative compliance, or a compliance made infinite by a time
   // step whose square is subnormal or rounds to 0: no correction, and λ keeps its value (a
-  // NaN |d| must not reach it). Both rules, on a sentinel-filled output.
+  // NaN |d| must not reach it). PBD and XPBD on the DirectionValue, on a sentinel-filled
+  // output.
   const Real nan = std::numeric_limits<Real>::quiet_NaN();
   const Real inf = std::numeric_limits<Real>::infinity();
   const Real subnormal_square = std::sqrt(std::numeric_limits<Real>::min()) / 4;

@@ -192,9 +192,9 @@ template <class V>
 HWY_INLINE Mask<V> fem_tetra_xpbd(const Vec3<V> (&p)[4], const V (&w)[4], V volume,
                                   const Mat3<V>& rest_inverse, V nu, V compliance, V dt,
                                   bool handle_inversion, V& lambda_xpbd, Vec3<V> (&corr)[4]) {
-  const Mask<V> inputs_valid =
-      mask_and(mask_and(valid_poisson_ratio(nu), volume > zero<V>()),
-               mask_and(dt > zero<V>(), compliance >= zero<V>()));
+  const auto step = TimeStep<V>::of(dt);
+  const Mask<V> inputs_valid = mask_and(mask_and(valid_poisson_ratio(nu), volume > zero<V>()),
+                                        xpbd_inputs_valid(step, compliance));
   V mu, lambda;
   lame_parameters(splat<V>(1.0), nu, inputs_valid, mu, lambda);
   const TetraEnergy<V> element =
@@ -207,8 +207,7 @@ HWY_INLINE Mask<V> fem_tetra_xpbd(const Vec3<V> (&p)[4], const V (&w)[4], V volu
   value.C = C;
   for (int i = 0; i < 4; ++i) value.gradient[i] = element.gradient[i] * inverse_C;
   value.valid = mask_and(inputs_valid, has_gradient);
-  const Mask<V> projected =
-      project_xpbd(value, w, compliance, TimeStep<V>::of(dt), lambda_xpbd, corr);
+  const Mask<V> projected = project_xpbd(value, w, compliance, step, lambda_xpbd, corr);
   return mask_or(projected, mask_and(inputs_valid, mask_not(has_gradient)));
 }
 

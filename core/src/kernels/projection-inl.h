@@ -3,13 +3,14 @@
 // A family's formula evaluates its constraint C, the gradients ∇_i C of its N particles and a
 // mask of the lanes whose configuration is valid (not degenerate); then
 //   project_pbd:  Δp_i = -k · C / (Σ_j w_j |∇_j C|²) · w_i ∇_i C      (Müller et al. 2007)
-//   project_xpbd: α̃ = α/dt², Δλ = (-C - α̃ λ) / (Σ_j w_j |∇_j C|² + α̃), λ += Δλ,
+//   project_xpbd: α̃ = α/dt² (0 for α = 0), Δλ = (-C - α̃ λ) / (Σ_j w_j |∇_j C|² + α̃), λ += Δλ,
 //                 Δp_i = w_i Δλ ∇_i C                                   (Macklin et al. 2016)
 // Both return the mask of lanes that were projected; every other lane gets zero corrections
 // (and an unchanged λ). A static particle (w = 0) always gets exactly zero.
 //
-// α̃ is α · (1/dt²): the reciprocal is the same for every lane and batch, so a loop computes
-// it once (TimeStep) and each batch multiplies, where it divided per batch before.
+// α̃ is α · (1/dt²): the reciprocal is the same for every lane and batch, so the batch loop
+// makes it once (TimeStep) and each batch multiplies, where it divided per batch before (the
+// FEM kernels and the scalar API make it per call).
 //
 // A two-particle family whose gradients are a unit direction and its opposite (distance,
 // tether: ∇_{p0} C = n = d/|d|, ∇_{p1} C = −n) returns a DirectionValue instead: d and |d|,
@@ -70,8 +71,8 @@ HWY_INLINE V degenerate_denominator() {
   return splat<V>(double(kDegenerateTolerance) * double(kDegenerateTolerance));
 }
 
-/// An XPBD projection's time step and 1/dt² (0 where dt is not positive), made once per
-/// loop over batches.
+/// An XPBD projection's time step and 1/dt² (0 where dt is not positive; Inf where dt is so
+/// small that 1/dt² overflows), made once per loop over batches.
 template <class V>
 struct TimeStep {
   V dt;
@@ -84,21 +85,32 @@ struct TimeStep {
   }
 };
 
-/// α̃ = α · (1/dt²), 0 for α = 0 whatever dt (1/dt² is Inf when dt² underflows); the
-/// projections leave lanes whose α̃ is not finite.
+/// α̃ = α · (1/dt²), 0 for α = 0 whatever dt (1/dt² may be Inf); the projections leave
+/// lanes whose α̃ is not finite.
 template <class V>
 HWY_INLINE V scaled_compliance(V compliance, const TimeStep<V>& step) {
   return select(compliance == zero<V>(), zero<V>(), compliance * step.inverse_squared);
 }
 
+/// The lanes whose time step and compliance an XPBD projection accepts: dt > 0 and α ≥ 0
+/// with a finite α̃ (also what a family reports for a lane it leaves satisfied).
+template <class V>
+HWY_INLINE Mask<V> xpbd_inputs_valid(const TimeStep<V>& step, V compliance, V alpha_tilde) {
+  return mask_and(mask_and(step.dt > zero<V>(), compliance >= zero<V>()), is_finite(alpha_tilde));
+}
+template <class V>
+HWY_INLINE Mask<V> xpbd_inputs_valid(const TimeStep<V>& step, V compliance) {
+  return xpbd_inputs_valid(step, compliance, scaled_compliance(compliance, step));
+}
+
 /// The lanes an XPBD projection may project: the formula's valid lanes with a finite C, a
-/// non-degenerate Σ w|∇C|², a positive time step and a compliance ≥ 0 with a finite α̃.
+/// non-degenerate Σ w|∇C|², and the time step and compliance accepted.
 template <class V>
 HWY_INLINE Mask<V> xpbd_valid(const Mask<V>& formula_valid, V C, V weighted,
                               const TimeStep<V>& step, V compliance, V alpha_tilde) {
   return mask_and(
       mask_and(mask_and(formula_valid, is_finite(C)), weighted > degenerate_denominator<V>()),
-      mask_and(mask_and(step.dt > zero<V>(), compliance >= zero<V>()), is_finite(alpha_tilde)));
+      xpbd_inputs_valid(step, compliance, alpha_tilde));
 }
 
 template <class V, int N>

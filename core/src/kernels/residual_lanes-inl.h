@@ -62,13 +62,16 @@ HWY_INLINE RealLanes load(const Real* values, std::size_t i) {
   return hn::LoadU(RealTag(), values + i);
 }
 
-/// C + α̃λ on the lanes of constraints i .. i+W, α̃ = compliance × inverse_dt2: the XPBD
-/// residual (Macklin, Müller, Chentanez 2016, eq. 11), what a compliant solve drives to zero;
-/// C itself when inverse_dt2 is 0 (and for hard constraints, α = 0).
+/// C + α̃λ on the lanes of constraints i .. i+W, α̃ = compliance × inverse_dt2 as the
+/// projection makes it (projection-inl.h, scaled_compliance): the XPBD residual (Macklin,
+/// Müller, Chentanez 2016, eq. 11), what a compliant solve drives to zero; C itself when
+/// inverse_dt2 is 0 and for hard constraints (α = 0, whatever inverse_dt2).
 HWY_INLINE RealLanes xpbd_residual(RealLanes C, const Real* compliance, const Real* lambda,
                                    std::size_t i, Real inverse_dt2) {
   if (inverse_dt2 == 0) return C;
-  const RealLanes alpha_tilde = load(compliance, i) * hn::Set(RealTag(), inverse_dt2);
+  const RealLanes alpha = load(compliance, i);
+  const RealLanes alpha_tilde = select(alpha == zero<RealLanes>(), zero<RealLanes>(),
+                                       alpha * hn::Set(RealTag(), inverse_dt2));
   return C + alpha_tilde * load(lambda, i);
 }
 

@@ -11,6 +11,7 @@
 #include <tessera/coloring/run_colouring.hpp>
 #include <tessera/coloring/colouring_strategy.hpp>
 #include <tessera/coloring/model_graph.hpp>
+#include <tessera/coloring/particle_partition.hpp>
 #include <tessera/collision/self_intersections.hpp>
 #include <tessera/collision/solid_contacts.hpp>
 #include <tessera/core/error.hpp>
@@ -86,13 +87,17 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& options) {
                       "how the sweeps hold the particles: interleaved (x, y, z, w per particle, "
                       "default) or separate (an array per coordinate); the same results");
   command->add_option("--sweep-order", options.sweep_order,
-                      "modes gs and hybrid: colour-major (colour after colour, default) or "
-                      "part-major (each part's colours on one worker while its particles stay in "
-                      "cache, the parts in parallel; the parts of --strategy metis or blocks, or "
-                      "runs of the colouring's particle order)");
+                      "modes gs and hybrid: colour-major (colour after colour), part-major (each "
+                      "part's colours on one worker while its particles stay in cache, the parts "
+                      "in parallel; the parts of --strategy metis or blocks, or runs of the "
+                      "colouring's particle order) or auto (part-major from " +
+                          std::to_string(kPartMajorFromParts) +
+                          " parts up, the default; the summary names the order chosen)");
   command->add_option("--particles-per-part", options.particles_per_part,
-                      "movable particles per part of strategies metis and blocks, or of "
-                      "--sweep-order part-major (default 65536)")
+                      "movable particles per part of strategies metis and blocks (default " +
+                          std::to_string(kDefaultParticlesPerPart) +
+                          "), or per run of a part-major sweep of another strategy (default " +
+                          std::to_string(kDefaultParticlesPerRun) + ")")
       ->check(CLI::PositiveNumber);
   command->add_option("--divergence-rms", options.divergence_rms,
                       "a step that ends with an RMS residual above this fails (default 10; inf "
@@ -152,14 +157,14 @@ int run_command(const RunOptions& options) {
   const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   const ColouringStrategy& strategy = registry.get(simulation.strategy);
   if (options.particles_per_part && !strategy.makes_parts()) {
-    if (settings.sweep_order != SweepOrder::part_major) {
+    if (settings.sweep_order == SweepOrder::colour_major) {
       std::string with_parts;
       for (const std::string_view name : registry.names())
         if (registry.get(name).makes_parts())
           with_parts += (with_parts.empty() ? "" : " or ") + std::string(name);
       throw InvalidInput("--particles-per-part: needs a strategy with parts (" + with_parts +
-                         ") or --sweep-order part-major (strategy " + simulation.strategy +
-                         " has none)");
+                         ") or --sweep-order part-major or auto (strategy " +
+                         simulation.strategy + " has none)");
     }
     settings.particles_per_part = *options.particles_per_part;
   }
@@ -236,11 +241,13 @@ int run_command(const RunOptions& options) {
   summary.add("strategy", colouring ? simulation.strategy : std::string("none"));
   summary.add("mode", std::string(solver_mode_name(settings.mode)));
   summary.add("particle_layout", std::string(particle_layout_name(settings.particle_layout)));
-  summary.add("sweep_order", std::string(sweep_order_name(settings.sweep_order)));
+  // The order swept (auto: the one it chose).
+  const SweepOrder swept = solver.schedule().options().sweep_order;
+  summary.add("sweep_order", std::string(sweep_order_name(swept)));
   // The parts the sweep ran (part-major: the colouring's, or runs of its particle order);
   // colour-major: the colouring's, which it does not use.
   std::size_t parts = statistics.part_count;
-  if (settings.sweep_order != SweepOrder::part_major && colouring)
+  if (swept != SweepOrder::part_major && colouring)
     parts = colouring->colouring.part_count();
   summary.add("parts", parts);
   // Of the constraints, those the parts sweep (the rest cross parts: the colour phases).

@@ -191,6 +191,13 @@ DistributedSolver::DistributedSolver(const Model& model, const Colouring& colour
   settings.check_finite = false;
   settings.divergence_rms = std::numeric_limits<Real>::infinity();
   settings.report_residuals = false;
+  // The ghosts are exchanged between colours (the phase hook below), which a part-major sweep
+  // does not keep apart: a rank sweeps colour by colour whatever its domain's size, and a part
+  // size (which only sized the runs auto might have chosen) sizes nothing.
+  if (settings.sweep_order == SweepOrder::automatic) {
+    settings.sweep_order = SweepOrder::colour_major;
+    settings.particles_per_part = 0;
+  }
   solver_ = std::make_unique<Solver>(std::move(part), Colouring::from_colours(local_colour),
                                      settings);
   solver_->set_phase_hook([this](std::size_t phase, ParticleArrays particles) {

@@ -44,8 +44,11 @@ ScheduleOptions checked(ScheduleOptions options) {
     throw InvalidInput("schedule: block size must be at least 1 constraint");
   options.block_size = round_up(options.block_size, kMaxLanes);
   options.threads = worker_threads(options.threads);
-  if (options.sweep_order == SweepOrder::part_major && options.mode != SolverMode::gs &&
-      options.mode != SolverMode::hybrid)
+  const bool has_colour_phases =
+      options.mode == SolverMode::gs || options.mode == SolverMode::hybrid;
+  if (options.sweep_order == SweepOrder::automatic && !has_colour_phases)
+    options.sweep_order = SweepOrder::colour_major;
+  if (options.sweep_order == SweepOrder::part_major && !has_colour_phases)
     throw InvalidInput("schedule: sweep order part-major needs mode gs or hybrid (mode " +
                        std::string(solver_mode_name(options.mode)) + " has no colour phases)");
   return options;
@@ -122,14 +125,29 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
   SourceLists& coloured_source = coloured_source_;
   SourceLists& jacobi_source = jacobi_source_;
   if (options_.particles_per_part != 0 &&
-      (options_.sweep_order != SweepOrder::part_major || colouring->has_parts()))
+      (options_.sweep_order == SweepOrder::colour_major || colouring->has_parts()))
     throw InvalidInput(
         "schedule: particles per part sizes the runs a part-major sweep makes of a colouring "
         "without parts; " +
-        std::string(options_.sweep_order != SweepOrder::part_major
+        std::string(options_.sweep_order == SweepOrder::colour_major
                         ? "this sweep is colour-major"
                         : "this colouring has its own parts (its strategy's particles per part "
                           "sizes them)"));
+  const std::size_t particles_per_run =
+      options_.particles_per_part != 0 ? options_.particles_per_part : kDefaultParticlesPerRun;
+  if (options_.sweep_order == SweepOrder::automatic) {
+    // Counted as the constraint graph counts them (movable: inverse mass > 0), without
+    // building the graph a colour-major sweep does not need.
+    const auto& inverse_mass = model.particles.inverse_mass;
+    const std::size_t parts =
+        colouring->has_parts()
+            ? colouring->part_count()
+            : part_count_for(std::size_t(std::count_if(inverse_mass.begin(), inverse_mass.end(),
+                                                       [](Real w) { return w > 0; })),
+                             particles_per_run);
+    options_.sweep_order =
+        parts >= kPartMajorFromParts ? SweepOrder::part_major : SweepOrder::colour_major;
+  }
   if (options_.sweep_order == SweepOrder::part_major && colouring->has_parts()) {
     const ConstraintGraph graph = constraint_graph(model);
     check_claimed_parts(graph, colouring->part_of_constraint(), colouring->part_count());
@@ -142,8 +160,7 @@ Schedule::Schedule(const Model& model, const Colouring* colouring, const Schedul
     // the mesh). Made here, so they need no check (constraint_parts puts a constraint in a
     // part only when all its movable particles are there).
     const ConstraintGraph graph = constraint_graph(model);
-    const std::size_t parts =
-        part_count_for(graph.movable_particle_count(), options_.particles_per_part);
+    const std::size_t parts = part_count_for(graph.movable_particle_count(), particles_per_run);
     const ParticlePartition partition =
         new_to_old_.empty() ? partition_particles_in_blocks(graph, parts)
                             : partition_particles_in_runs(graph, new_to_old_, parts);

@@ -595,8 +595,13 @@ double Solver::run_substeps_in_one_region(Real h, const ProjectionSettings& proj
 
 void Solver::set_phase_hook(PhaseHook hook) {
   if (hook && schedule_.part_count() != 0)
-    throw InvalidInput("set_phase_hook: sweep order part-major sweeps the parts' colours "
-                       "without a phase boundary between them (colour-major has one)");
+    throw InvalidInput(std::string("set_phase_hook: sweep order part-major") +
+                       (settings_.sweep_order == SweepOrder::automatic
+                            ? " (chosen by auto for " + std::to_string(schedule_.part_count()) +
+                                  " parts)"
+                            : "") +
+                       " sweeps the parts' colours without a phase boundary between them "
+                       "(colour-major has one)");
   if (hook && settings_.mode != SolverMode::gs)
     throw InvalidInput(std::string("set_phase_hook: mode ") +
                        std::string(solver_mode_name(settings_.mode)) +

@@ -83,12 +83,14 @@ std::string_view sweep_order_name(SweepOrder order) {
   switch (order) {
     case SweepOrder::colour_major: return "colour-major";
     case SweepOrder::part_major: return "part-major";
+    case SweepOrder::automatic: return "auto";
   }
   return "unknown";
 }
 
 SweepOrder parse_sweep_order(std::string_view name) {
-  constexpr SweepOrder kOrders[] = {SweepOrder::colour_major, SweepOrder::part_major};
+  constexpr SweepOrder kOrders[] = {SweepOrder::colour_major, SweepOrder::part_major,
+                                    SweepOrder::automatic};
   return parse_named(name, kOrders, sweep_order_name, "sweep order");
 }
 

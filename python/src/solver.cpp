@@ -164,7 +164,7 @@ void bind_solver(py::module_& m) {
            py::arg("contact_scheduling") =
                std::string(contact_scheduling_name(kDefaultContactScheduling)),
            py::arg("particle_layout") = std::string(particle_layout_name(kDefaultParticleLayout)),
-           py::arg("sweep_order") = std::string(sweep_order_name(SweepOrder::colour_major)),
+           py::arg("sweep_order") = std::string(sweep_order_name(SweepOrder::automatic)),
            py::arg("particles_per_part") = 0)
       .def(
           "step",
@@ -292,6 +292,8 @@ void bind_solver(py::module_& m) {
             d["jacobi_constraints"] = st.jacobi_constraints;
             // Part-major: the parts the sweep ran and the constraints they held (0 otherwise).
             d["parts"] = st.part_count;
+            // The order swept (sweep_order "auto": the one it chose), as the tool's summary.
+            d["sweep_order"] = std::string(sweep_order_name(s.schedule().options().sweep_order));
             d["part_constraints"] = st.part_constraints;
             d["threads"] = st.threads;
             d["seconds_schedule"] = st.seconds_schedule;

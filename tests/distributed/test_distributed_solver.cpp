@@ -225,6 +225,28 @@ TEST(Agreement, AFailureOnOneRankEndsEveryRankWithTheLowestFailingRanksMessage) 
   EXPECT_TRUE(none.message.empty());
 }
 
+TEST(DistributedExact, AutoSweepOrderSweepsEveryRankColourByColour) {
+  // With runs of 4 particles, auto picks part-major in one process. A rank exchanges its
+  // ghosts between colours, so it sweeps colour by colour: the ranks give the single
+  // process's colour-major state (not an error from the phase hook).
+  const Model cloth = scene_model("cloth:24x20", "distance");
+  const Colouring colouring = colour(cloth, "stencil");
+  SolverSettings automatic = settings_for(2);
+  automatic.particles_per_part = 4;
+  ASSERT_EQ(automatic.sweep_order, SweepOrder::automatic) << "the default";
+  DistributedSolver distributed(cloth, colouring, automatic, MPI_COMM_WORLD);
+  for (int step = 0; step < 3; ++step) distributed.step();
+  const std::vector<Vector3r> gathered = distributed.gather_positions();
+  if (world_rank() != 0) return;
+  ASSERT_EQ(Solver(cloth, colouring, automatic).schedule().options().sweep_order,
+            SweepOrder::part_major);
+  SolverSettings colour_major = settings_for(2);
+  colour_major.sweep_order = SweepOrder::colour_major;
+  Solver one(cloth, colouring, colour_major);
+  for (int step = 0; step < 3; ++step) one.step();
+  EXPECT_EQ(state_hash(gathered), state_hash(one.positions()));
+}
+
 TEST(DistributedExact, RefusalsAreTheSameOnEveryRank) {
   const Model cloth = scene_model("cloth:8x8", "distance");
   const Colouring colouring = colour(cloth, "stencil");

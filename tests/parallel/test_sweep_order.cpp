@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <tessera/coloring/colouring_strategy.hpp>
+#include <tessera/coloring/particle_partition.hpp>
 #include <tessera/coloring/run_colouring.hpp>
 #include <tessera/parallel/solver.hpp>
 
@@ -223,6 +224,78 @@ TEST(SweepOrder, StaticParticlesStayPutAndHybridRunsTheSmallCrossingColoursAsJac
   }
 }
 
+std::size_t movable_count(const Model& model) {
+  const auto& w = model.particles.inverse_mass;
+  return std::size_t(std::count_if(w.begin(), w.end(), [](Real m) { return m > 0; }));
+}
+
+TEST(SweepOrder, AutoIsPartMajorFromThePartCountUpWithTheChosenOrdersBits) {
+  // Runs sized so the cloth makes one part fewer than kPartMajorFromParts, then exactly as
+  // many: auto sweeps colour-major, then part-major, each bit for bit as that order set by
+  // hand, on 1 and 2 threads.
+  const Model cloth = test::cloth_model(40, 32);
+  const Colouring stencil = test::colour_model(cloth, "stencil");
+  const std::size_t movable = movable_count(cloth);
+  for (const std::size_t parts : {kPartMajorFromParts - 1, kPartMajorFromParts}) {
+    const std::size_t per_run = (movable + parts - 1) / parts;
+    ASSERT_EQ(part_count_for(movable, per_run), parts);
+    const SweepOrder chosen =
+        parts >= kPartMajorFromParts ? SweepOrder::part_major : SweepOrder::colour_major;
+    SolverSettings by_hand = settings_with(chosen, 1);
+    if (chosen == SweepOrder::part_major) by_hand.particles_per_part = per_run;
+    const auto expected = after_steps(cloth, stencil, by_hand, 3);
+    for (const std::size_t threads : {1, 2}) {
+      SCOPED_TRACE(std::to_string(parts) + " parts, " + std::to_string(threads) + " threads");
+      SolverSettings automatic = settings_with(SweepOrder::automatic, threads);
+      automatic.particles_per_part = per_run;
+      Solver solver(cloth, stencil, automatic);
+      EXPECT_EQ(solver.schedule().options().sweep_order, chosen);
+      EXPECT_EQ(solver.statistics().part_count, chosen == SweepOrder::part_major ? parts : 0);
+      for (int step = 0; step < 3; ++step) solver.step();
+      EXPECT_TRUE(test::same_bits(solver.positions(), expected));
+    }
+  }
+  // The default settings, on this small cloth: colour-major.
+  EXPECT_EQ(SolverSettings{}.sweep_order, SweepOrder::automatic);
+  EXPECT_EQ(Solver(cloth, stencil, SolverSettings{}).schedule().options().sweep_order,
+            SweepOrder::colour_major);
+}
+
+TEST(SweepOrder, AutoCountsAColouringsOwnPartsAndLeavesModesWithoutColourPhasesAlone) {
+  const Model cloth = test::cloth_model(40, 32);
+  const std::size_t movable = movable_count(cloth);
+  for (const std::size_t parts : {kPartMajorFromParts - 1, kPartMajorFromParts}) {
+    const Colouring blocks =
+        part_colouring(cloth, (movable + parts - 1) / parts, "blocks");
+    ASSERT_EQ(blocks.part_count(), parts);
+    Solver solver(cloth, blocks, settings_with(SweepOrder::automatic, 2));
+    EXPECT_EQ(solver.schedule().options().sweep_order,
+              parts >= kPartMajorFromParts ? SweepOrder::part_major : SweepOrder::colour_major);
+  }
+  // Modes without colour phases: colour-major, not the error part-major would be; a part
+  // size there sizes nothing, as with colour-major.
+  const Colouring greedy = test::colour_model(cloth, "greedy");
+  for (const SolverMode mode : {SolverMode::jacobi, SolverMode::sequential}) {
+    SolverSettings settings = settings_with(SweepOrder::automatic, 2);
+    settings.mode = mode;
+    EXPECT_EQ(Solver(cloth, greedy, settings).schedule().options().sweep_order,
+              SweepOrder::colour_major);
+    settings.particles_per_part = 4;
+    EXPECT_THROW(Solver(cloth, greedy, settings), InvalidInput);
+  }
+}
+
+TEST(SweepOrder, RunsWithoutASizeHoldTheDefaultRunSize) {
+  // 130 × 128 particles, two pinned: more than one default run, fewer than two.
+  const Model cloth = test::cloth_model(130, 128);
+  const std::size_t movable = movable_count(cloth);
+  ASSERT_GT(movable, kDefaultParticlesPerRun);
+  ASSERT_LT(movable, 2 * kDefaultParticlesPerRun);
+  Solver solver(cloth, test::colour_model(cloth, "stencil"),
+                settings_with(SweepOrder::part_major, 2));
+  EXPECT_EQ(solver.statistics().part_count, 2u);
+}
+
 TEST(SweepOrder, WrongUseIsAClearError) {
   const Model cloth = test::cloth_model(16, 16);
   const auto expect_error = [](auto&& make, const std::string& words) {
@@ -255,11 +328,18 @@ TEST(SweepOrder, WrongUseIsAClearError) {
                "this sweep is colour-major");
   sized.sweep_order = SweepOrder::part_major;
   expect_error([&] { Solver(cloth, metis, sized); }, "this colouring has its own parts");
-  // A phase hook needs phase boundaries.
+  // A phase hook needs phase boundaries, and says when auto chose the order without them.
   Solver solver(cloth, metis, settings_with(SweepOrder::part_major, 1));
   expect_error([&] { solver.set_phase_hook([](std::size_t, ParticleArrays) {}); }, "part-major");
+  SolverSettings automatic = settings_with(SweepOrder::automatic, 1);
+  automatic.particles_per_part = 2;
+  Solver chosen(cloth, test::colour_model(cloth, "greedy"), automatic);
+  expect_error([&] { chosen.set_phase_hook([](std::size_t, ParticleArrays) {}); },
+               "sweep order part-major (chosen by auto for " +
+                   std::to_string(chosen.statistics().part_count) + " parts)");
   // Names.
   EXPECT_EQ(parse_sweep_order("part-major"), SweepOrder::part_major);
+  EXPECT_EQ(parse_sweep_order("auto"), SweepOrder::automatic);
   EXPECT_EQ(sweep_order_name(SweepOrder::colour_major), "colour-major");
   expect_error([] { parse_sweep_order("row-major"); }, "unknown sweep order 'row-major'");
 }

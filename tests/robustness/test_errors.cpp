@@ -319,6 +319,7 @@ TEST(ErrorCatalogue, PartSizeThatSizesNothing) {
   // colouring without parts.
   const Model model = test::cloth_model(3, 3);
   SolverSettings settings;
+  settings.sweep_order = SweepOrder::colour_major;
   settings.particles_per_part = 4;
   EXPECT_EQ(invalid_input([&] { Solver(model, test::colour_model(model), settings); }),
             "schedule: particles per part sizes the runs a part-major sweep makes of a "

@@ -142,7 +142,7 @@ TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountOverAnyColouring) {
   EXPECT_EQ(a["state_hash"], b["state_hash"]);
   const Json colour_major = run_json({"run", "cloth:40", "--frames", "3", "--strategy", "metis",
                                       "--particles-per-part", "200"});
-  EXPECT_EQ(colour_major["sweep_order"], "colour-major") << "the default";
+  EXPECT_EQ(colour_major["sweep_order"], "colour-major") << "auto, for 8 parts";
   EXPECT_NE(colour_major["state_hash"], a["state_hash"]) << "another Gauss-Seidel order";
   // Parts from runs of the numbering (strategy blocks): the same for any thread count, and
   // other parts than METIS's, so other bits.
@@ -171,9 +171,21 @@ TEST_F(Cli, PartMajorSweepsTheSameForAnyThreadCountOverAnyColouring) {
   };
   expect_clear_error({"run", "cloth:12", "--frames", "1", "--sweep-order", "diagonal"},
                      "unknown sweep order 'diagonal'");
-  expect_clear_error({"run", "cloth:12", "--frames", "1", "--particles-per-part", "64"},
+  expect_clear_error({"run", "cloth:12", "--frames", "1", "--sweep-order", "colour-major",
+                      "--particles-per-part", "64"},
                      "needs a strategy with parts (metis or blocks) or --sweep-order "
-                     "part-major (strategy stencil has none)");
+                     "part-major or auto (strategy stencil has none)");
+  // Auto (the default) sweeps part-major from 32 parts up, and the summary names its choice:
+  // 1,598 movable particles in runs of 50 are 32 parts, in runs of 52 are 31.
+  const Json chosen = run_json({"run", "cloth:40", "--frames", "3", "--particles-per-part", "50"});
+  EXPECT_EQ(chosen["sweep_order"], "part-major");
+  EXPECT_EQ(chosen["parts"].get<int>(), 32);
+  const Json by_hand = run_json({"run", "cloth:40", "--frames", "3", "--particles-per-part", "50",
+                                 "--sweep-order", "part-major"});
+  EXPECT_EQ(chosen["state_hash"], by_hand["state_hash"]);
+  const Json fewer = run_json({"run", "cloth:40", "--frames", "3", "--particles-per-part", "52"});
+  EXPECT_EQ(fewer["sweep_order"], "colour-major");
+  EXPECT_EQ(fewer["state_hash"], stencil["state_hash"]);
 }
 
 TEST_F(Cli, RunSummaryHoldsEveryKey) {
@@ -515,7 +527,7 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
       {{"run", "--sequential-order", "random"}, "tessera run: unknown sequential order 'random' (known: groups, input)"},
       {{"run", "--divergence-rms", "0"}, "tessera run: --divergence-rms: must be a number above 0 or inf, not '0'"},
       {{"run", "--strategy", "nope"}, "tessera run: unknown colouring strategy 'nope' " + strategies},
-      {{"run", "--particles-per-part", "64"}, "tessera run: --particles-per-part: needs a strategy with parts (metis or blocks) or --sweep-order part-major (strategy stencil has none)"},
+      {{"run", "--sweep-order", "colour-major", "--particles-per-part", "64"}, "tessera run: --particles-per-part: needs a strategy with parts (metis or blocks) or --sweep-order part-major or auto (strategy stencil has none)"},
       {{"run", "--pins", "left"}, "tessera run: --pins: unknown pin rule 'left' (known: default, none, lowest-x, lowest-y, lowest-z, highest-x, highest-y, highest-z)"},
       {{"run", "--bending", "floppy"}, "tessera run: --bending: unknown value 'floppy' (known: dihedral, isometric, none)"},
       {{"run", "--shell-material", "silk"}, "tessera run: --shell-material: unknown value 'silk' (known: distance, strain_triangle, fem_triangle)"},

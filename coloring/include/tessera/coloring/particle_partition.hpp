@@ -22,8 +22,9 @@ struct ParticlePartition {
   std::vector<std::uint32_t> part_of_particle;
 };
 
-/// The default part size, in movable particles: of the part strategies (metis and blocks), and
-/// of the runs a part-major sweep makes of a colouring without parts. Chosen for
+/// The default part size of the part strategies (metis and blocks), in movable particles (the
+/// runs a part-major sweep makes of a colouring without parts have their own default,
+/// kDefaultParticlesPerRun in parallel/solver_mode.hpp). Chosen for
 /// metis by measurement (bench_coloring, coloring/metis/<mesh>/particles_per_part:<k>, 1024² cloth
 /// with bending and a 2.2 M-constraint tet bar): parts of 1,024 / 4,096 / 16,384 / 65,536 particles
 /// gave 23 / 24 / 23 / 23 colours on the cloth and 48 / 47 / 47 / 46 on the tet bar, a mean

@@ -68,11 +68,13 @@ struct ScheduleOptions {
   /// Mode sequential: the order of the sweep.
   SequentialOrder sequential_order = SequentialOrder::groups;
   /// Modes gs and hybrid: colour after colour, or part after part (InvalidInput in another
-  /// mode). Part after part takes the colouring's parts (Colouring::has_parts), or, for a
-  /// colouring without parts, runs of particles_per_part movable particles of the schedule's
-  /// particle order (0: kDefaultParticlesPerPart; any other value with a colour-major sweep or
-  /// a colouring with parts is InvalidInput, as it would size nothing).
-  SweepOrder sweep_order = SweepOrder::colour_major;
+  /// mode), or automatic, which the schedule resolves to one of them (options() holds the
+  /// choice; in another mode colour_major). Part after part takes the colouring's parts
+  /// (Colouring::has_parts), or, for a colouring without parts, runs of particles_per_part
+  /// movable particles of the schedule's particle order (0: kDefaultParticlesPerRun; any other
+  /// value with a colour-major sweep or a colouring with parts is InvalidInput, as it would
+  /// size nothing).
+  SweepOrder sweep_order = SweepOrder::automatic;
   std::size_t particles_per_part = 0;
 };
 

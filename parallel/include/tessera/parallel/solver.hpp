@@ -170,11 +170,13 @@ struct SolverSettings {
   ContactScheduling contact_scheduling = kDefaultContactScheduling;
   /// How the sweeps hold the particles (solver_mode.hpp); the same bits either way.
   ParticleLayout particle_layout = kDefaultParticleLayout;
-  /// Modes gs and hybrid: colour after colour, or part after part (solver_mode.hpp): the
-  /// colouring's parts (strategies metis and blocks, sized by their ColouringOptions), or for
-  /// any other colouring runs of particles_per_part movable particles of its particle order (0:
-  /// kDefaultParticlesPerPart; set only for those runs, InvalidInput otherwise).
-  SweepOrder sweep_order = SweepOrder::colour_major;
+  /// Modes gs and hybrid: colour after colour, or part after part, or chosen by the scene
+  /// (automatic, the default: part after part from kPartMajorFromParts parts up;
+  /// solver_mode.hpp). The parts are the colouring's (strategies metis and blocks, sized by
+  /// their ColouringOptions), or for any other colouring runs of particles_per_part movable
+  /// particles of its particle order (0: kDefaultParticlesPerRun; set only for those runs,
+  /// InvalidInput otherwise). schedule().options().sweep_order is the order chosen.
+  SweepOrder sweep_order = SweepOrder::automatic;
   std::size_t particles_per_part = 0;
   /// Consecutive coloured phases run in one parallel region per iteration, the threads
   /// meeting at a spin barrier between colours (parallel/src/phase_region.hpp); with coloured

@@ -4,6 +4,7 @@
 // and one stage-list builder (Schedule::build_stages).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string_view>
@@ -90,9 +91,32 @@ enum class SweepOrder : std::uint8_t {
   /// the same for any thread count. In mode hybrid the threshold applies to each colour's crossing
   /// constraints: the small ones go to the Jacobi set, the parts never do.
   part_major,
+  /// part_major when the sweep would have at least kPartMajorFromParts parts (the colouring's,
+  /// or its runs), colour_major otherwise (and in modes jacobi and sequential): a scene whose
+  /// particles outgrow a core's cache is swept part by part, a smaller one colour by colour.
+  /// Decided by the scene and settings alone, never by the thread count or the machine, so the
+  /// results stay the same for any thread count. The default; Schedule::options() and the
+  /// tool's summary name the order it chose.
+  automatic,
 };
 
-/// "colour-major", "part-major".
+/// A sweep set to SweepOrder::automatic is part-major from this many parts up. Measured on
+/// the 256² to 1024² cloths and the tet bars (docs/performance.md, "The sweep order chosen by
+/// the scene"): with runs of kDefaultParticlesPerRun, 16 parts (a 512² cloth, 4 MB of float
+/// particles, within the last-level cache) swept equally in either order, 36 parts (768²) and
+/// 65 (1024²) up to twice as fast part-major. 32 parts also keep 32 workers busy in the
+/// parts' one phase.
+inline constexpr std::size_t kPartMajorFromParts = 32;
+
+/// The size of the runs a part-major sweep makes of a colouring without parts, in movable
+/// particles, when SolverSettings::particles_per_part is 0: 256 KiB of interleaved float
+/// particles (512 KiB double), within a core's L2 with room for the constraints streamed
+/// through it. On the 1024² cloth runs of 16,384 swept as fast as runs of 65,536 in double
+/// and up to 1.3 times faster in float (docs/performance.md, "The sweep order chosen by the
+/// scene"), and give four times the parts to share among workers.
+inline constexpr std::size_t kDefaultParticlesPerRun = 16384;
+
+/// "colour-major", "part-major", "auto".
 std::string_view sweep_order_name(SweepOrder order);
 /// The order of that name; throws InvalidInput listing the names for any other.
 SweepOrder parse_sweep_order(std::string_view name);

@@ -65,6 +65,7 @@ class SolverStatistics(TypedDict):
     jacobi_constraints: int
     parts: int
     part_constraints: int
+    sweep_order: str
     threads: int
     seconds_schedule: float
     seconds_projection: float
@@ -264,7 +265,7 @@ class Solver:
         sequential_order: str = "groups",
         contact_scheduling: str = "coloured",
         particle_layout: str = "interleaved",
-        sweep_order: str = "colour-major",
+        sweep_order: str = "auto",
         particles_per_part: int = 0,
     ) -> None: ...
     def step(self, steps: int = 1) -> None:

@@ -103,22 +103,27 @@ HWY_INLINE Mask<V> xpbd_inputs_valid(const TimeStep<V>& step, V compliance) {
   return xpbd_inputs_valid(step, compliance, scaled_compliance(compliance, step));
 }
 
-/// The lanes an XPBD projection may project: the formula's valid lanes with a finite C, a
-/// non-degenerate Σ w|∇C|², and the time step and compliance accepted.
+/// The lanes a PBD projection may project: the formula's valid lanes with a finite C and a
+/// non-degenerate Σ w|∇C|².
+template <class V>
+HWY_INLINE Mask<V> pbd_valid(const Mask<V>& formula_valid, V C, V weighted) {
+  return mask_and(mask_and(formula_valid, is_finite(C)), weighted > degenerate_denominator<V>());
+}
+
+/// The lanes an XPBD projection may project: those of a PBD projection, with the time step
+/// and compliance accepted.
 template <class V>
 HWY_INLINE Mask<V> xpbd_valid(const Mask<V>& formula_valid, V C, V weighted,
                               const TimeStep<V>& step, V compliance, V alpha_tilde) {
-  return mask_and(
-      mask_and(mask_and(formula_valid, is_finite(C)), weighted > degenerate_denominator<V>()),
-      xpbd_inputs_valid(step, compliance, alpha_tilde));
+  return mask_and(pbd_valid(formula_valid, C, weighted),
+                  xpbd_inputs_valid(step, compliance, alpha_tilde));
 }
 
 template <class V, int N>
 HWY_INLINE Mask<V> project_pbd(const ConstraintValue<V, N>& value, const V (&w)[N],
                                V stiffness, Vec3<V> (&corr)[N]) {
   const V denominator = weighted_gradient_norm(value, w);
-  const Mask<V> valid = mask_and(mask_and(value.valid, is_finite(value.C)),
-                                 denominator > degenerate_denominator<V>());
+  const Mask<V> valid = pbd_valid(value.valid, value.C, denominator);
   const V s = safe_divide(stiffness * value.C, denominator, valid);
   for (int i = 0; i < N; ++i) corr[i] = keep_if(valid, value.gradient[i] * (zero<V>() - s * w[i]));
   return valid;
@@ -142,8 +147,7 @@ template <class V>
 HWY_INLINE Mask<V> project_pbd(const DirectionValue<V>& value, const V (&w)[2], V stiffness,
                                Vec3<V> (&corr)[2]) {
   const V weighted = w[0] + w[1];
-  const Mask<V> valid = mask_and(mask_and(value.valid, is_finite(value.C)),
-                                 weighted > degenerate_denominator<V>());
+  const Mask<V> valid = pbd_valid(value.valid, value.C, weighted);
   const V s = safe_divide(stiffness * value.C, weighted * value.length, valid);
   corr[0] = keep_if(valid, value.difference * (zero<V>() - s * w[0]));
   corr[1] = keep_if(valid, value.difference * (s * w[1]));

@@ -183,6 +183,8 @@ int run_distributed(const RunOptions& options, const std::function<RunSetup()>& 
   summary.add("strategy", simulation.strategy);
   summary.add("mode", std::string(solver_mode_name(settings.mode)));
   summary.add("particle_layout", std::string(particle_layout_name(settings.particle_layout)));
+  // Every rank sweeps colour by colour (DistributedSolver).
+  summary.add("sweep_order", std::string(sweep_order_name(SweepOrder::colour_major)));
   summary.add("distributed", *options.distributed);
   summary.add("ranks", mpi.size());
   summary.add("threads", local.threads);

@@ -157,6 +157,11 @@ int run_command(const RunOptions& options) {
   const ColouringRegistry registry = ColouringRegistry::with_builtin_strategies();
   const ColouringStrategy& strategy = registry.get(simulation.strategy);
   if (options.particles_per_part && !strategy.makes_parts()) {
+    if (settings.mode != SolverMode::gs && settings.mode != SolverMode::hybrid)
+      throw InvalidInput("--particles-per-part: sizes the runs of a part-major sweep, which "
+                         "mode " + std::string(solver_mode_name(settings.mode)) +
+                         " does not run (modes gs and hybrid do; strategy " +
+                         simulation.strategy + " has no parts)");
     if (settings.sweep_order == SweepOrder::colour_major) {
       std::string with_parts;
       for (const std::string_view name : registry.names())

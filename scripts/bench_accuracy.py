@@ -109,6 +109,7 @@ def run_one(tessera, scene, substeps, iterations, mode, tethers, frames, threads
         distance_max=summary.get("residual_distance_max_final"),
         constraints=summary.get("constraints"),
         colours=summary.get("colours"),
+        sweep_order=summary.get("sweep_order"),   # the default (auto) picks by the scene
         state_hash=summary.get("state_hash"),
     )
     for key, value in summary.items():   # every family's residual, for the JSON

@@ -51,6 +51,11 @@ ScheduleOptions checked(ScheduleOptions options) {
   if (options.sweep_order == SweepOrder::part_major && !has_colour_phases)
     throw InvalidInput("schedule: sweep order part-major needs mode gs or hybrid (mode " +
                        std::string(solver_mode_name(options.mode)) + " has no colour phases)");
+  // Checked here, before mode sequential's input order returns early.
+  if (options.particles_per_part != 0 && !has_colour_phases)
+    throw InvalidInput("schedule: particles per part sizes the runs of a part-major sweep, "
+                       "which mode " + std::string(solver_mode_name(options.mode)) +
+                       " does not run (modes gs and hybrid do)");
   return options;
 }
 

@@ -271,8 +271,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     settings.hybrid_threshold = in.byte() % 20;
     if (in.byte() >= 240) settings.gravity = Vector3r(in.value(), in.value(), in.value());
     // Part-major over the colouring's parts, or runs of its particle order (a part size only
-    // where it sizes runs: any other is InvalidInput), or the order auto picks (with runs of
-    // 1 to 7 particles, part-major on scenes of 32 movable particles or more).
+    // where it sizes runs: any other is InvalidInput), or the order auto picks (part-major
+    // only with 32 parts of one particle each: the scenes have at most 32 particles).
     constexpr SweepOrder kOrders[] = {SweepOrder::colour_major, SweepOrder::part_major,
                                       SweepOrder::automatic};
     settings.sweep_order = kOrders[in.byte() % 3];

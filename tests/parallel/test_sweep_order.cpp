@@ -272,16 +272,47 @@ TEST(SweepOrder, AutoCountsAColouringsOwnPartsAndLeavesModesWithoutColourPhasesA
     EXPECT_EQ(solver.schedule().options().sweep_order,
               parts >= kPartMajorFromParts ? SweepOrder::part_major : SweepOrder::colour_major);
   }
-  // Modes without colour phases: colour-major, not the error part-major would be; a part
-  // size there sizes nothing, as with colour-major.
-  const Colouring greedy = test::colour_model(cloth, "greedy");
+  // Modes without colour phases: colour-major even where the parts would be enough, not the
+  // error part-major would be; a part size there sizes nothing (InvalidInput), in sequential's
+  // input order too.
+  const Colouring blocks = part_colouring(cloth, 4, "blocks");
+  ASSERT_GE(blocks.part_count(), kPartMajorFromParts);
   for (const SolverMode mode : {SolverMode::jacobi, SolverMode::sequential}) {
     SolverSettings settings = settings_with(SweepOrder::automatic, 2);
     settings.mode = mode;
-    EXPECT_EQ(Solver(cloth, greedy, settings).schedule().options().sweep_order,
+    EXPECT_EQ(Solver(cloth, blocks, settings).schedule().options().sweep_order,
               SweepOrder::colour_major);
     settings.particles_per_part = 4;
+    const Colouring greedy = test::colour_model(cloth, "greedy");
     EXPECT_THROW(Solver(cloth, greedy, settings), InvalidInput);
+    settings.sequential_order = SequentialOrder::input;
+    EXPECT_THROW(Solver(cloth, greedy, settings), InvalidInput);
+  }
+}
+
+TEST(SweepOrder, AutoByDefaultCountsDefaultRunsOfMovableParticles) {
+  // One particle short of 32 default runs of movable particles, and exactly enough; 20,000
+  // static particles more each time, which would tip the first over if they were counted.
+  // Particles on a line, four of the movable ones joined by distance constraints.
+  const std::size_t enough = (kPartMajorFromParts - 1) * kDefaultParticlesPerRun + 1;
+  constexpr std::size_t kStatic = 20000;
+  for (const std::size_t movable : {enough - 1, enough}) {
+    std::vector<Vector3r> positions(kStatic + movable);
+    for (std::size_t p = 0; p < positions.size(); ++p)
+      positions[p] = Vector3r(Real(0.01) * Real(p), 0, 0);
+    std::vector<Real> inverse_masses(positions.size(), Real(1));
+    std::fill_n(inverse_masses.begin(), kStatic, Real(0));
+    std::vector<ParticleIndex> pairs;
+    for (ParticleIndex p = kStatic; p < kStatic + 4; ++p) pairs.insert(pairs.end(), {p, p + 1});
+    Model model;
+    model.particles = ParticleState(positions, inverse_masses);
+    model.constraints.distance = make_distance_constraints({pairs, positions});
+    Solver solver(model, test::colour_model(model, "greedy"), SolverSettings{});
+    const bool part_major = movable >= enough;
+    EXPECT_EQ(solver.schedule().options().sweep_order,
+              part_major ? SweepOrder::part_major : SweepOrder::colour_major)
+        << movable << " movable particles";
+    EXPECT_EQ(solver.statistics().part_count, part_major ? kPartMajorFromParts : 0);
   }
 }
 

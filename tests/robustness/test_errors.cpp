@@ -329,6 +329,14 @@ TEST(ErrorCatalogue, PartSizeThatSizesNothing) {
             "schedule: particles per part sizes the runs a part-major sweep makes of a "
             "colouring without parts; this colouring has its own parts (its strategy's "
             "particles per part sizes them)");
+  // A mode without colour phases, whatever the sweep order (input order has no colouring).
+  settings = SolverSettings{};
+  settings.mode = SolverMode::sequential;
+  settings.sequential_order = SequentialOrder::input;
+  settings.particles_per_part = 4;
+  EXPECT_EQ(invalid_input([&] { Solver(model, test::colour_model(model), settings); }),
+            "schedule: particles per part sizes the runs of a part-major sweep, which mode "
+            "sequential does not run (modes gs and hybrid do)");
 }
 
 TEST(ErrorCatalogue, BatchBuiltForAnotherModel) {

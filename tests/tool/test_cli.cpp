@@ -527,6 +527,7 @@ TEST_F(Cli, BadInputIsOneLineAndExitCodeTwo) {
       {{"run", "--sequential-order", "random"}, "tessera run: unknown sequential order 'random' (known: groups, input)"},
       {{"run", "--divergence-rms", "0"}, "tessera run: --divergence-rms: must be a number above 0 or inf, not '0'"},
       {{"run", "--strategy", "nope"}, "tessera run: unknown colouring strategy 'nope' " + strategies},
+      {{"run", "--mode", "jacobi", "--particles-per-part", "64"}, "tessera run: --particles-per-part: sizes the runs of a part-major sweep, which mode jacobi does not run (modes gs and hybrid do; strategy stencil has no parts)"},
       {{"run", "--sweep-order", "colour-major", "--particles-per-part", "64"}, "tessera run: --particles-per-part: needs a strategy with parts (metis or blocks) or --sweep-order part-major or auto (strategy stencil has none)"},
       {{"run", "--pins", "left"}, "tessera run: --pins: unknown pin rule 'left' (known: default, none, lowest-x, lowest-y, lowest-z, highest-x, highest-y, highest-z)"},
       {{"run", "--bending", "floppy"}, "tessera run: --bending: unknown value 'floppy' (known: dihedral, isometric, none)"},

@@ -70,7 +70,9 @@ class DistributedSolver {
   /// what it holds in ascending global order, and no constraint's arithmetic depends on the
   /// numbering. Throws InvalidInput otherwise, or for what Solver refuses. settings.check_finite
   /// and the divergence bound are applied collectively after each step (step() throws
-  /// NumericalFailure on every rank when any rank has a non-finite position).
+  /// NumericalFailure on every rank when any rank has a non-finite position). Each rank
+  /// sweeps colour by colour (its ghosts are exchanged between colours): SweepOrder::automatic
+  /// becomes colour_major, with particles_per_part dropped; part_major is refused.
   DistributedSolver(const Model& model, const Colouring& colouring, SolverSettings settings,
                     MPI_Comm communicator, DistributedMode mode = DistributedMode::exact);
 

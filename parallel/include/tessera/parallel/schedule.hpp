@@ -72,8 +72,9 @@ struct ScheduleOptions {
   /// choice; in another mode colour_major). Part after part takes the colouring's parts
   /// (Colouring::has_parts), or, for a colouring without parts, runs of particles_per_part
   /// movable particles of the schedule's particle order (0: kDefaultParticlesPerRun; any other
-  /// value with a colour-major sweep or a colouring with parts is InvalidInput, as it would
-  /// size nothing).
+  /// value with a colour-major sweep, a colouring with parts or a mode other than gs and
+  /// hybrid is InvalidInput, as it would size nothing; with automatic it sizes the runs the
+  /// choice counts, whichever order it makes).
   SweepOrder sweep_order = SweepOrder::automatic;
   std::size_t particles_per_part = 0;
 };

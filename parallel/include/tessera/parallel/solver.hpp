@@ -175,7 +175,8 @@ struct SolverSettings {
   /// solver_mode.hpp). The parts are the colouring's (strategies metis and blocks, sized by
   /// their ColouringOptions), or for any other colouring runs of particles_per_part movable
   /// particles of its particle order (0: kDefaultParticlesPerRun; set only for those runs,
-  /// InvalidInput otherwise). schedule().options().sweep_order is the order chosen.
+  /// with part_major or automatic in mode gs or hybrid, InvalidInput otherwise).
+  /// schedule().options().sweep_order is the order chosen.
   SweepOrder sweep_order = SweepOrder::automatic;
   std::size_t particles_per_part = 0;
   /// Consecutive coloured phases run in one parallel region per iteration, the threads

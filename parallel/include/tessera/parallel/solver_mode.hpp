@@ -101,10 +101,10 @@ enum class SweepOrder : std::uint8_t {
 };
 
 /// A sweep set to SweepOrder::automatic is part-major from this many parts up. Measured on
-/// the 256² to 1024² cloths and the tet bars (docs/performance.md, "The sweep order chosen by
+/// the 512² to 1024² cloths and the tet bars (docs/performance.md, "The sweep order chosen by
 /// the scene"): with runs of kDefaultParticlesPerRun, 16 parts (a 512² cloth, 4 MB of float
 /// particles, within the last-level cache) swept equally in either order, 36 parts (768²) and
-/// 65 (1024²) up to twice as fast part-major. 32 parts also keep 32 workers busy in the
+/// 64 (1024²) up to twice as fast part-major. 32 parts also keep 32 workers busy in the
 /// parts' one phase.
 inline constexpr std::size_t kPartMajorFromParts = 32;
 

@@ -34,10 +34,13 @@ namespace tessera {
 namespace HWY_NAMESPACE {
 
 /// The unsigned angle |atan2(y, x)| ∈ [0, π] of the point (x, y), branch-free.
-/// One lane uses std::atan2. W lanes reduce to an argument in [0, 1] for Highway's Atan:
+/// One lane uses std::atan2. W lanes reduce to an argument in [0, 1] for Highway's atan
+/// polynomial:
 ///   a = min(|y|, |x|) / max(|y|, |x|),  t = atan(a),  t ← π/2 - t where |y| > |x|,
 ///   t ← π - t where x < 0  (so atan2(0, negative) = π, as std::atan2(+0, x < 0)).
-/// (0, 0) gives 0.
+/// (0, 0) gives 0. hn::Atan takes any argument, so it divides 1/a on every lane (kept only
+/// where a > 1): a division on the path to C that a ∈ [0, 1] never needs. Its polynomial is
+/// called directly, the same t for every a ∈ [0, 1].
 template <class V>
 HWY_INLINE V lane_unsigned_atan2(V y, V x) {
   if constexpr (kScalarLane<V>) {
@@ -46,7 +49,7 @@ HWY_INLINE V lane_unsigned_atan2(V y, V x) {
     const V ay = lane_abs(y), ax = lane_abs(x);
     const V largest = lane_max(ay, ax), smallest = lane_min(ay, ax);
     const V ratio = safe_divide(smallest, largest, largest > zero<V>());
-    V t = hn::Atan(hn::DFromV<V>(), ratio);
+    V t = hn::impl::AtanImpl<hn::TFromV<V>>().AtanPoly(hn::DFromV<V>(), ratio);
     t = select(ay > ax, splat<V>(std::numbers::pi / 2) - t, t);
     return select(x < zero<V>(), splat<V>(std::numbers::pi) - t, t);
   }
@@ -70,10 +73,12 @@ HWY_INLINE ConstraintValue<V, 4> dihedral_constraint(const Vec3<V>& p0, const Ve
   value.valid = mask_and(edge_squared > tolerance_squared,
                          mask_and(normal0_squared > flat_below, normal1_squared > flat_below));
 
+  // atan2 depends on the ratio of its arguments alone, so both are scaled by |e| rather than
+  // the first divided by it: one division fewer on the path to C.
   const V edge_length = lane_sqrt(edge_squared);
-  const V sine_part =  // |N1||N2| sin ψ
-      safe_divide(dot(cross(normal0, normal1), edge), edge_length, value.valid);
-  const V cosine_part = dot(normal0, normal1);  // |N1||N2| cos ψ
+  const V sine_part =  // |N1||N2||e| sin ψ
+      select(value.valid, dot(cross(normal0, normal1), edge), zero<V>());
+  const V cosine_part = dot(normal0, normal1) * edge_length;  // |N1||N2||e| cos ψ
   value.C = lane_unsigned_atan2(sine_part, cosine_part) - rest_angle;
 
   const V signed_edge_length = zero<V>() - sign_or_one(sine_part) * edge_length;

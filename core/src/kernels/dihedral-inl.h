@@ -49,6 +49,8 @@ HWY_INLINE V lane_unsigned_atan2(V y, V x) {
     const V ay = lane_abs(y), ax = lane_abs(x);
     const V largest = lane_max(ay, ax), smallest = lane_min(ay, ax);
     const V ratio = safe_divide(smallest, largest, largest > zero<V>());
+    // Highway's own polynomial, from its internal namespace (Highway 1.0.3, Debian 12); were it
+    // to move, hn::Atan(d, ratio) gives the same bits with the division back.
     V t = hn::impl::AtanImpl<hn::TFromV<V>>().AtanPoly(hn::DFromV<V>(), ratio);
     t = select(ay > ax, splat<V>(std::numbers::pi / 2) - t, t);
     return select(x < zero<V>(), splat<V>(std::numbers::pi) - t, t);
@@ -74,11 +76,15 @@ HWY_INLINE ConstraintValue<V, 4> dihedral_constraint(const Vec3<V>& p0, const Ve
                          mask_and(normal0_squared > flat_below, normal1_squared > flat_below));
 
   // atan2 depends on the ratio of its arguments alone, so both are scaled by |e| rather than
-  // the first divided by it: one division fewer on the path to C.
+  // the first divided by it: one division fewer on the path to C. An invalid lane reads
+  // atan2(0, N1 · N2) (its |e| may be 0, and 0 · a negative dot would be -0, which the lane
+  // atan2 and std::atan2 read differently).
   const V edge_length = lane_sqrt(edge_squared);
   const V sine_part =  // |N1||N2||e| sin ψ
       select(value.valid, dot(cross(normal0, normal1), edge), zero<V>());
-  const V cosine_part = dot(normal0, normal1) * edge_length;  // |N1||N2||e| cos ψ
+  const V normals_dot = dot(normal0, normal1);
+  const V cosine_part =  // |N1||N2||e| cos ψ
+      select(value.valid, normals_dot * edge_length, normals_dot);
   value.C = lane_unsigned_atan2(sine_part, cosine_part) - rest_angle;
 
   const V signed_edge_length = zero<V>() - sign_or_one(sine_part) * edge_length;

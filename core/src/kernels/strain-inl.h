@@ -48,30 +48,36 @@ HWY_INLINE Vec3<V> strain_column(const Vec3<V> (&edge)[Dim], const V (&m)[Dim][D
   return f;
 }
 
-/// C and ∇C of one sub-constraint at positions p.
+/// C of one sub-constraint and its derivatives ∂C/∂f_first, ∂C/∂f_second (zero for a stretch).
+template <class V>
+struct StrainValue {
+  V C;
+  Vec3<V> d_first;
+  Vec3<V> d_second;
+  Mask<V> valid;
+};
+
+/// C and ∂C/∂f of one sub-constraint at positions p.
 template <int Dim, class V>
-HWY_INLINE ConstraintValue<V, Dim + 1> strain_sub_constraint(const Vec3<V> (&p)[Dim + 1],
-                                                             const V (&m)[Dim][Dim],
-                                                             StrainEntry entry,
-                                                             bool normalize_stretch,
-                                                             bool normalize_shear) {
+HWY_INLINE StrainValue<V> strain_sub_constraint(const Vec3<V> (&p)[Dim + 1],
+                                                const V (&m)[Dim][Dim], StrainEntry entry,
+                                                bool normalize_stretch, bool normalize_shear) {
   Vec3<V> edge[Dim];
   for (int k = 0; k < Dim; ++k) edge[k] = p[k + 1] - p[0];
   const Vec3<V> fa = strain_column<Dim>(edge, m, entry.first);
 
-  ConstraintValue<V, Dim + 1> value;
+  StrainValue<V> value;
   value.valid = all_lanes<V>();
-  Vec3<V> d_first, d_second = Vec3<V>::zeros();
-  const bool stretch = entry.first == entry.second;
-  if (stretch) {
+  value.d_second = Vec3<V>::zeros();
+  if (entry.first == entry.second) {
     if (normalize_stretch) {
       const V length = norm(fa);
       value.valid = length > splat<V>(kDegenerateTolerance);
       value.C = length - splat<V>(1.0);
-      d_first = fa * safe_divide(splat<V>(1.0), length, value.valid);
+      value.d_first = fa * safe_divide(splat<V>(1.0), length, value.valid);
     } else {
       value.C = squared_norm(fa) - splat<V>(1.0);
-      d_first = fa * splat<V>(2.0);
+      value.d_first = fa * splat<V>(2.0);
     }
   } else {
     const Vec3<V> fb = strain_column<Dim>(edge, m, entry.second);
@@ -83,47 +89,86 @@ HWY_INLINE ConstraintValue<V, Dim + 1> strain_sub_constraint(const Vec3<V> (&p)[
       const V inverse_b = safe_divide(splat<V>(1.0), length_b, value.valid);
       const Vec3<V> unit_a = fa * inverse_a, unit_b = fb * inverse_b;
       value.C = dot(unit_a, unit_b);
-      d_first = (unit_b - unit_a * value.C) * inverse_a;
-      d_second = (unit_a - unit_b * value.C) * inverse_b;
+      value.d_first = (unit_b - unit_a * value.C) * inverse_a;
+      value.d_second = (unit_a - unit_b * value.C) * inverse_b;
     } else {
       value.C = dot(fa, fb);
-      d_first = fb;
-      d_second = fa;
+      value.d_first = fb;
+      value.d_second = fa;
     }
-  }
-
-  value.gradient[0] = Vec3<V>::zeros();
-  for (int k = 0; k < Dim; ++k) {
-    Vec3<V> g = d_first * m[k][entry.first];
-    if (!stretch) g += d_second * m[k][entry.second];
-    value.gradient[k + 1] = g;
-    value.gradient[0] -= g;
   }
   return value;
 }
 
-/// Projects the Count sub-constraints in order (entries[s] with stiffness[s]) and writes the
-/// summed corrections. Returns the lanes where no active sub-constraint was degenerate;
-/// every other lane gets zero corrections.
+/// The chain rule's weights Q_ab = Σ_i w_i c_i^a c_i^b, where ∇_{p_i} C = Σ_a c_i^a ∂C/∂f_a
+/// with c_{k+1}^a = M_ka and c_0^a = -Σ_k M_ka. They make the PBD denominator of a
+/// sub-constraint a small quadratic form in its derivatives,
+///   Σ_i w_i |∇_i C|² = |∂C/∂f_a|² Q_aa + 2 (∂C/∂f_a · ∂C/∂f_b) Q_ab + |∂C/∂f_b|² Q_bb,
+/// built once per element from w and M alone, so no sub-constraint sums the N gradients'
+/// squares on its path from C to its correction.
+template <int Dim, class V>
+HWY_INLINE void strain_chain_weights(const V (&w)[Dim + 1], const V (&m)[Dim][Dim],
+                                     V (&q)[Dim][Dim]) {
+  V c0[Dim], weighted_c0[Dim];
+  for (int a = 0; a < Dim; ++a) {
+    V sum = m[0][a];
+    for (int k = 1; k < Dim; ++k) sum = sum + m[k][a];
+    c0[a] = zero<V>() - sum;
+    weighted_c0[a] = w[0] * c0[a];
+  }
+  for (int a = 0; a < Dim; ++a) {
+    for (int b = a; b < Dim; ++b) {
+      V sum = weighted_c0[a] * c0[b];
+      for (int k = 0; k < Dim; ++k) sum = sum + w[k + 1] * m[k][a] * m[k][b];
+      q[a][b] = sum;
+      q[b][a] = sum;
+    }
+  }
+}
+
+/// Projects the Count sub-constraints in order (entries[s] with stiffness[s]) with the PBD rule
+/// (projection-inl.h) and writes the summed corrections. Returns the lanes where no active
+/// sub-constraint was degenerate; every other lane gets zero corrections.
 template <int Dim, int Count, class V>
 HWY_INLINE Mask<V> project_strain(Vec3<V> (&p)[Dim + 1], const V (&w)[Dim + 1],
                                   const V (&m)[Dim][Dim], const StrainEntry (&entries)[Count],
                                   const V (&stiffness)[Count], bool normalize_stretch,
                                   bool normalize_shear, Vec3<V> (&corr)[Dim + 1]) {
   constexpr int N = Dim + 1;
+  V q[Dim][Dim];
+  strain_chain_weights<Dim>(w, m, q);
   Mask<V> ok = all_lanes<V>();
   for (int i = 0; i < N; ++i) corr[i] = Vec3<V>::zeros();
+  // Unrolled, so each sub-constraint's columns a, b are constants: a rolled loop indexed M and
+  // Q in stack arrays at run time (double, AVX-512).
+  HWY_UNROLL(8)
   for (int s = 0; s < Count; ++s) {
-    const auto value =
-        strain_sub_constraint<Dim>(p, m, entries[s], normalize_stretch, normalize_shear);
-    Vec3<V> step[N];
-    const Mask<V> projected = project_pbd(value, w, stiffness[s], step);
+    const int a = entries[s].first, b = entries[s].second;
+    const auto value = strain_sub_constraint<Dim>(p, m, entries[s], normalize_stretch,
+                                                  normalize_shear);
+    V weighted = squared_norm(value.d_first) * q[a][a];
+    if (a != b) {
+      weighted = weighted + dot(value.d_first, value.d_second) * (q[a][b] + q[a][b]) +
+                 squared_norm(value.d_second) * q[b][b];
+    }
+    const Mask<V> projected = pbd_valid(value.valid, value.C, weighted);
+    const V scale = safe_divide(stiffness[s] * value.C, weighted, projected);
+    // ∇_{p_{k+1}} C = ∂C/∂f_a M_ka + ∂C/∂f_b M_kb, ∇_{p0} C = -Σ_k ∇_{p_{k+1}} C;
+    // Δp_i = -s w_i ∇_i C.
+    Vec3<V> gradient0 = Vec3<V>::zeros();
+    for (int k = 0; k < Dim; ++k) {
+      Vec3<V> gradient = value.d_first * m[k][a];
+      if (a != b) gradient += value.d_second * m[k][b];
+      gradient0 -= gradient;
+      const Vec3<V> step = keep_if(projected, gradient * (zero<V>() - scale * w[k + 1]));
+      p[k + 1] += step;
+      corr[k + 1] += step;
+    }
+    const Vec3<V> step0 = keep_if(projected, gradient0 * (zero<V>() - scale * w[0]));
+    p[0] += step0;
+    corr[0] += step0;
     // A zero-stiffness sub-constraint is skipped (its step is zero whatever it computed).
     ok = mask_and(ok, mask_or(projected, stiffness[s] == zero<V>()));
-    for (int i = 0; i < N; ++i) {
-      p[i] += step[i];
-      corr[i] += step[i];
-    }
   }
   for (int i = 0; i < N; ++i) corr[i] = keep_if(ok, corr[i]);
   return ok;

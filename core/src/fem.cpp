@@ -122,7 +122,8 @@ bool XPBD::solve_FEMTetraConstraint(const Vector3r& p0, Real invMass0, const Vec
   const Real w[4] = {invMass0, invMass1, invMass2, invMass3};
   lanes::Vec3<Real> result[4];
   const bool ok = lanes::fem_tetra_xpbd<Real>(p, w, restVolume, lanes::from_eigen(invRestMat),
-                                              poissonRatio, compliance, dt, handleInversion,
+                                              poissonRatio, compliance,
+                                              lanes::TimeStep<Real>::of(dt), handleInversion,
                                               lambda, result);
   write_corrections<4>(result, {&corr0, &corr1, &corr2, &corr3});
   return ok;

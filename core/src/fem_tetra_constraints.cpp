@@ -27,7 +27,7 @@ HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
   const std::size_t lanes = hn::Lanes(d);
   const ParticleIndex* slot[4];
   constraint_slots(constraints.particles, slot);
-  const RealLanes dt = hn::Set(d, time_step);
+  const auto step = TimeStep<RealLanes>::of(hn::Set(d, time_step));
   for (std::size_t i = begin; i < end; i += lanes) {
     const std::size_t active_count = end - i;
     const LaneMask active = hn::FirstN(d, active_count);
@@ -47,7 +47,7 @@ HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
     if constexpr (kCompliance) {
       RealLanes lambda = hn::LoadU(d, constraints.lambda.data() + i);
       fem_tetra_xpbd(p, w, volume, rest_inverse, poisson,
-                     hn::LoadU(d, constraints.compliance.data() + i), dt, kHandleInversion,
+                     hn::LoadU(d, constraints.compliance.data() + i), step, kHandleInversion,
                      lambda, corr);
       store_active(lambda, active_count, constraints.lambda.data() + i);
     } else {

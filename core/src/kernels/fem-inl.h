@@ -187,12 +187,19 @@ HWY_INLINE Mask<V> fem_tetra_pbd(const Vec3<V> (&p)[4], const V (&w)[4], V volum
   return mask_or(projected, mask_and(material_valid, at_rest));
 }
 
-/// XPBD FEM tetrahedron (λ updated in the projected lanes only).
+/// XPBD FEM tetrahedron (λ updated in the projected lanes only). step is the loop's
+/// TimeStep::of(dt), made once per loop over batches.
+///
+/// With C = sqrt(2E) (E = V0 ψ₁) and ∇C = ∇E / C, the XPBD rule (projection-inl.h) is written
+/// with the unscaled ∇E and C² = 2E, so 1/C leaves the path from E to the corrections:
+///   t = (−C − α̃ λ) C / (Σ_i w_i |∇_i E|² + α̃ 2E),   Δλ = t C,   Δp_i = t w_i ∇_i E,
+/// the same Δλ and Δp as (−C − α̃ λ) / (Σ_i w_i |∇_i C|² + α̃) and Δλ w_i ∇_i C, and the
+/// lanes it projects are those where Σ_i w_i |∇_i C|² = Σ_i w_i |∇_i E|² / 2E would pass.
 template <class V>
 HWY_INLINE Mask<V> fem_tetra_xpbd(const Vec3<V> (&p)[4], const V (&w)[4], V volume,
-                                  const Mat3<V>& rest_inverse, V nu, V compliance, V dt,
-                                  bool handle_inversion, V& lambda_xpbd, Vec3<V> (&corr)[4]) {
-  const auto step = TimeStep<V>::of(dt);
+                                  const Mat3<V>& rest_inverse, V nu, V compliance,
+                                  const TimeStep<V>& step, bool handle_inversion,
+                                  V& lambda_xpbd, Vec3<V> (&corr)[4]) {
   const Mask<V> inputs_valid = mask_and(mask_and(valid_poisson_ratio(nu), volume > zero<V>()),
                                         xpbd_inputs_valid(step, compliance));
   V mu, lambda;
@@ -200,15 +207,23 @@ HWY_INLINE Mask<V> fem_tetra_xpbd(const Vec3<V> (&p)[4], const V (&w)[4], V volu
   const TetraEnergy<V> element =
       fem_tetra_energy(p, volume, rest_inverse, mu, lambda, handle_inversion);
   // ψ₁ ≥ 0 for a valid ν; the clamp only absorbs round-off.
-  const V C = lane_sqrt(splat<V>(2.0) * lane_max(element.energy, zero<V>()));
+  const V two_energy = splat<V>(2.0) * lane_max(element.energy, zero<V>());
+  const V C = lane_sqrt(two_energy);
   const Mask<V> has_gradient = C > splat<V>(kDegenerateTolerance);
-  const V inverse_C = safe_divide(splat<V>(1.0), C, has_gradient);
-  ConstraintValue<V, 4> value;
-  value.C = C;
-  for (int i = 0; i < 4; ++i) value.gradient[i] = element.gradient[i] * inverse_C;
-  value.valid = mask_and(inputs_valid, has_gradient);
-  const Mask<V> projected = project_xpbd(value, w, compliance, step, lambda_xpbd, corr);
-  return mask_or(projected, mask_and(inputs_valid, mask_not(has_gradient)));
+  ConstraintValue<V, 4> energy_value;
+  energy_value.C = C;
+  for (int i = 0; i < 4; ++i) energy_value.gradient[i] = element.gradient[i];
+  const V weighted_energy = weighted_gradient_norm(energy_value, w);
+  const V alpha_tilde = scaled_compliance(compliance, step);
+  const Mask<V> valid = mask_and(
+      mask_and(mask_and(inputs_valid, has_gradient), is_finite(C)),
+      mask_and(weighted_energy > degenerate_denominator<V>() * two_energy,
+               xpbd_inputs_valid(step, compliance, alpha_tilde)));
+  const V t = safe_divide((zero<V>() - C - alpha_tilde * lambda_xpbd) * C,
+                          weighted_energy + alpha_tilde * two_energy, valid);
+  lambda_xpbd = lambda_xpbd + select(valid, t * C, zero<V>());
+  for (int i = 0; i < 4; ++i) corr[i] = keep_if(valid, element.gradient[i] * (t * w[i]));
+  return mask_or(valid, mask_and(inputs_valid, mask_not(has_gradient)));
 }
 
 /// PBD FEM triangle (orthotropic plane stress), m[k][j] = invRestMat(k, j). Returns the lanes

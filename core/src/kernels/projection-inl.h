@@ -10,7 +10,7 @@
 //
 // α̃ is α · (1/dt²): the reciprocal is the same for every lane and batch, so the batch loop
 // makes it once (TimeStep) and each batch multiplies, where it divided per batch before (the
-// FEM kernels and the scalar API make it per call).
+// scalar API makes it per call).
 //
 // A two-particle family whose gradients are a unit direction and its opposite (distance,
 // tether: ∇_{p0} C = n = d/|d|, ∇_{p1} C = −n) returns a DirectionValue instead: d and |d|,

@@ -28,6 +28,16 @@ HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
   const ParticleIndex* slot[4];
   constraint_slots(constraints.particles, slot);
   const auto step = TimeStep<RealLanes>::of(hn::Set(d, time_step));
+  // The arrays' addresses, read once: the scatter's vector stores may alias anything, so
+  // through `constraints` each batch would reload them.
+  const Real* rest_inverse_entry[9];
+  for (int k = 0; k < 9; ++k)
+    rest_inverse_entry[k] = constraints.rest_inverse[std::size_t(k)].data();
+  const Real* volume_of = constraints.volume.data();
+  const Real* poisson_of = constraints.poisson_ratio.data();
+  const Real* compliance_of = constraints.compliance.data();
+  const Real* youngs_modulus_of = constraints.youngs_modulus.data();
+  Real* lambda_of = constraints.lambda.data();
   for (std::size_t i = begin; i < end; i += lanes) {
     const std::size_t active_count = end - i;
     const LaneMask active = hn::FirstN(d, active_count);
@@ -37,22 +47,19 @@ HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
     gather_constraint_particles(particles, slot, i, end, gathered, p, w);
     Mat3<RealLanes> rest_inverse;
     for (int j = 0; j < 3; ++j)
-      rest_inverse.col[j] = {
-          hn::LoadU(d, constraints.rest_inverse[std::size_t(j)].data() + i),
-          hn::LoadU(d, constraints.rest_inverse[std::size_t(3 + j)].data() + i),
-          hn::LoadU(d, constraints.rest_inverse[std::size_t(6 + j)].data() + i)};
-    const RealLanes volume = hn::LoadU(d, constraints.volume.data() + i);
-    const RealLanes poisson = hn::LoadU(d, constraints.poisson_ratio.data() + i);
+      rest_inverse.col[j] = {hn::LoadU(d, rest_inverse_entry[j] + i),
+                             hn::LoadU(d, rest_inverse_entry[3 + j] + i),
+                             hn::LoadU(d, rest_inverse_entry[6 + j] + i)};
+    const RealLanes volume = hn::LoadU(d, volume_of + i);
+    const RealLanes poisson = hn::LoadU(d, poisson_of + i);
     Vec3<RealLanes> corr[4];
     if constexpr (kCompliance) {
-      RealLanes lambda = hn::LoadU(d, constraints.lambda.data() + i);
-      fem_tetra_xpbd(p, w, volume, rest_inverse, poisson,
-                     hn::LoadU(d, constraints.compliance.data() + i), step, kHandleInversion,
-                     lambda, corr);
-      store_active(lambda, active_count, constraints.lambda.data() + i);
+      RealLanes lambda = hn::LoadU(d, lambda_of + i);
+      fem_tetra_xpbd(p, w, volume, rest_inverse, poisson, hn::LoadU(d, compliance_of + i), step,
+                     kHandleInversion, lambda, corr);
+      store_active(lambda, active_count, lambda_of + i);
     } else {
-      fem_tetra_pbd(p, w, volume, rest_inverse,
-                    hn::LoadU(d, constraints.youngs_modulus.data() + i), poisson,
+      fem_tetra_pbd(p, w, volume, rest_inverse, hn::LoadU(d, youngs_modulus_of + i), poisson,
                     kHandleInversion, corr);
     }
     scatter_constraint_particles(particles, slot, i, gathered, corr, active);

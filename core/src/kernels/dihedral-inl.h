@@ -92,8 +92,10 @@ HWY_INLINE ConstraintValue<V, 4> dihedral_constraint(const Vec3<V>& p0, const Ve
       normal0 * safe_divide(signed_edge_length, normal0_squared, value.valid);
   const Vec3<V> grad_wing1 =
       normal1 * safe_divide(signed_edge_length, normal1_squared, value.valid);
-  const V s0 = safe_divide(dot(p0 - p2, edge), edge_squared, value.valid);
-  const V s1 = safe_divide(dot(p1 - p2, edge), edge_squared, value.valid);
+  // s0 and s1 share 1/|e|²: one division for both.
+  const V inverse_edge_squared = safe_divide(splat<V>(1.0), edge_squared, value.valid);
+  const V s0 = dot(p0 - p2, edge) * inverse_edge_squared;
+  const V s1 = dot(p1 - p2, edge) * inverse_edge_squared;
   const V one = splat<V>(1.0);
   value.gradient[0] = grad_wing0;
   value.gradient[1] = grad_wing1;

@@ -559,5 +559,31 @@ TEST(XPBDFEMTetra, InvalidInputLeavesTheMultiplierUnchanged) {
   for (const auto& c : rest.corr) EXPECT_EQ(c, Vector3r::Zero());
 }
 
+// Σ w |∇E|² grows as the cube of C: an element stretched so far that it overflows (float;
+// double's range holds these) is left alone, never reported projected with a zero or NaN step.
+TEST(XPBDFEMTetra, AnOverflowingStretchIsLeftAloneNotSteppedByZero) {
+  Random random(44);
+  const RestTet t = random_rest_tet(random);
+  for (const Real scale : {Real(1e5), Real(1e6), Real(1e7), Real(1e8)}) {
+    std::array<Vector3r, 4> p = t.p;
+    for (auto& x : p) x *= scale;
+    Real lambda = Real(-0.25);
+    const XpbdResult r = solve_xpbd(p, {1, 1, 1, 1}, t, Real(1e-4), Real(0.01), lambda);
+    EXPECT_TRUE(std::isfinite(lambda)) << scale;
+    Real moved = 0;
+    for (const auto& c : r.corr) {
+      EXPECT_TRUE(c.allFinite()) << scale;
+      moved += c.norm();
+    }
+    if (r.ok) {
+      EXPECT_NE(lambda, Real(-0.25)) << scale;
+      EXPECT_GT(moved, 0) << scale;
+    } else {
+      EXPECT_EQ(lambda, Real(-0.25)) << scale;
+      EXPECT_EQ(moved, 0) << scale;
+    }
+  }
+}
+
 }  // namespace fem_tests
 }  // namespace tessera::test

@@ -402,5 +402,27 @@ TEST(StrainTetra, DegenerateInputGivesFalseAndZeroCorrections) {
   EXPECT_TRUE(all_finite(solve_tet(flat, {1, 1, 1, 1}, t.inv_rest, ones, ones, true, true).corr));
 }
 
+// A shear whose one movable vertex has a vanishing gradient: ∇_{p0} C_xy = c0^x f_y + c0^y f_x
+// with c0 = -(column sums of M) = (-0.3, -0.7), zero for f_y = -(7/3) f_x. The denominator,
+// a quadratic form in ∂C/∂f, is then rounding noise of its squares' size: the element is
+// degenerate (false, zero corrections), never stepped by C divided by that noise.
+TEST(StrainTetra, ShearWithAVanishingMovableGradientIsDegenerate) {
+  Matrix3r m = Matrix3r::Zero();
+  m(0, 0) = Real(0.3);
+  m(1, 1) = Real(0.7);
+  m(2, 2) = Real(1);
+  const Vector3r p0(Real(0.5), Real(-0.25), Real(0.75));
+  for (const Vector3r& edge : {Vector3r(Real(0.1), Real(0.2), Real(0.3)),
+                               Vector3r(Real(0.7), Real(-0.3), Real(0.11)),
+                               Vector3r(Real(1.3), Real(0.9), Real(-0.6))}) {
+    // f_x = 0.3 (p1 - p0), f_y = 0.7 (p2 - p0) = -0.7 edge = -(7/3) f_x.
+    const std::array<Vector3r, 4> p = {p0, p0 + edge, p0 - edge, p0 + Vector3r(0, 0, 1)};
+    const Result4 r = solve_tet(p, {1, 0, 0, 0}, m, Vector3r::Zero(), Vector3r(1, 0, 0), false,
+                                false);
+    EXPECT_FALSE(r.ok) << edge.transpose();
+    for (const auto& c : r.corr) EXPECT_EQ(c, Vector3r::Zero()) << edge.transpose();
+  }
+}
+
 }  // namespace strain_tests
 }  // namespace tessera::test

@@ -210,20 +210,22 @@ HWY_INLINE Mask<V> fem_tetra_xpbd(const Vec3<V> (&p)[4], const V (&w)[4], V volu
   const V two_energy = splat<V>(2.0) * lane_max(element.energy, zero<V>());
   const V C = lane_sqrt(two_energy);
   const Mask<V> has_gradient = C > splat<V>(kDegenerateTolerance);
-  ConstraintValue<V, 4> energy_value;
-  energy_value.C = C;
-  for (int i = 0; i < 4; ++i) energy_value.gradient[i] = element.gradient[i];
-  const V weighted_energy = weighted_gradient_norm(energy_value, w);
+  ConstraintValue<V, 4> energy_gradient;  // only its gradients are read: ∇E, not ∇C
+  for (int i = 0; i < 4; ++i) energy_gradient.gradient[i] = element.gradient[i];
+  const V weighted_energy = weighted_gradient_norm(energy_gradient, w);  // Σ w |∇E|²
   const V alpha_tilde = scaled_compliance(compliance, step);
   const Mask<V> valid = mask_and(
       mask_and(mask_and(inputs_valid, has_gradient), is_finite(C)),
       mask_and(weighted_energy > degenerate_denominator<V>() * two_energy,
                xpbd_inputs_valid(step, compliance, alpha_tilde)));
-  const V t = safe_divide((zero<V>() - C - alpha_tilde * lambda_xpbd) * C,
-                          weighted_energy + alpha_tilde * two_energy, valid);
-  lambda_xpbd = lambda_xpbd + select(valid, t * C, zero<V>());
-  for (int i = 0; i < 4; ++i) corr[i] = keep_if(valid, element.gradient[i] * (t * w[i]));
-  return mask_or(valid, mask_and(inputs_valid, mask_not(has_gradient)));
+  const V denominator = weighted_energy + alpha_tilde * two_energy;
+  const V t = safe_divide((zero<V>() - C - alpha_tilde * lambda_xpbd) * C, denominator, valid);
+  // |∇E|² grows as the cube of C's: a lane whose denominator or step overflowed (a float
+  // element stretched about a million times) is left alone rather than stepped by 0 or NaN.
+  const Mask<V> projected = mask_and(valid, mask_and(is_finite(denominator), is_finite(t)));
+  lambda_xpbd = lambda_xpbd + select(projected, t * C, zero<V>());
+  for (int i = 0; i < 4; ++i) corr[i] = keep_if(projected, element.gradient[i] * (t * w[i]));
+  return mask_or(projected, mask_and(inputs_valid, mask_not(has_gradient)));
 }
 
 /// PBD FEM triangle (orthotropic plane stress), m[k][j] = invRestMat(k, j). Returns the lanes

@@ -126,6 +126,11 @@ HWY_INLINE void strain_chain_weights(const V (&w)[Dim + 1], const V (&m)[Dim][Di
   }
 }
 
+/// Relative size below which a shear's denominator is rounding noise: 8 units of float's
+/// round-off, whatever Real is (a denominator a million times below its squares is degenerate
+/// in either precision).
+inline constexpr double kStrainFormRoundOff = 8 * 1.1920928955078125e-07;
+
 /// Projects the Count sub-constraints in order (entries[s] with stiffness[s]) with the PBD rule
 /// (projection-inl.h) and writes the summed corrections. Returns the lanes where no active
 /// sub-constraint was degenerate; every other lane gets zero corrections.
@@ -141,17 +146,25 @@ HWY_INLINE Mask<V> project_strain(Vec3<V> (&p)[Dim + 1], const V (&w)[Dim + 1],
   for (int i = 0; i < N; ++i) corr[i] = Vec3<V>::zeros();
   // Unrolled, so each sub-constraint's columns a, b are constants: a rolled loop indexed M and
   // Q in stack arrays at run time (double, AVX-512).
+  static_assert(Count <= 8, "HWY_UNROLL below unrolls up to 8 sub-constraints");
   HWY_UNROLL(8)
   for (int s = 0; s < Count; ++s) {
     const int a = entries[s].first, b = entries[s].second;
     const auto value = strain_sub_constraint<Dim>(p, m, entries[s], normalize_stretch,
                                                   normalize_shear);
     V weighted = squared_norm(value.d_first) * q[a][a];
+    Mask<V> projected;
     if (a != b) {
-      weighted = weighted + dot(value.d_first, value.d_second) * (q[a][b] + q[a][b]) +
-                 squared_norm(value.d_second) * q[b][b];
+      // The form's squares are each ≥ 0, its cross term is not: where they cancel (a shear
+      // whose movable vertices' gradients vanish, Q singular by pinned vertices) the sum is
+      // rounding noise of their size, and the lane counts as degenerate.
+      const V squares = weighted + squared_norm(value.d_second) * q[b][b];
+      weighted = squares + dot(value.d_first, value.d_second) * (q[a][b] + q[a][b]);
+      projected = mask_and(pbd_valid(value.valid, value.C, weighted),
+                           weighted > squares * splat<V>(kStrainFormRoundOff));
+    } else {
+      projected = pbd_valid(value.valid, value.C, weighted);
     }
-    const Mask<V> projected = pbd_valid(value.valid, value.C, weighted);
     const V scale = safe_divide(stiffness[s] * value.C, weighted, projected);
     // ∇_{p_{k+1}} C = ∂C/∂f_a M_ka + ∂C/∂f_b M_kb, ∇_{p0} C = -Σ_k ∇_{p_{k+1}} C;
     // Δp_i = -s w_i ∇_i C.

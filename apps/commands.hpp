@@ -51,4 +51,8 @@ int info_command(const InfoOptions& options);
 /// Prints "tessera[ <command>]: <message>" as exactly one line on stderr (every failure).
 void print_error(const std::string& command, std::string message);
 
+/// While a scene is built, freed memory stays in the heap for the next temporary (set in
+/// main); once it is built, this hands what is free back to the system.
+void release_freed_memory();
+
 }  // namespace tessera::cli

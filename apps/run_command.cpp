@@ -216,6 +216,7 @@ int run_command(const RunOptions& options) {
   if (collisions)
     solver.set_collisions(*collisions, when_self(scene.surface_triangles),
                           when_self(scene.mesh.tetrahedra));
+  release_freed_memory();
 
   if (output)
     output->write(0, 0.0, solver.positions(),

@@ -8,6 +8,11 @@
 // Both return the mask of lanes that were projected; every other lane gets zero corrections
 // (and an unchanged λ). A static particle (w = 0) always gets exactly zero.
 //
+// Two families write these rules out in forms that are equal in exact arithmetic and keep the
+// same contract: the strain sub-constraints (Σ w|∇C|² as a quadratic form in ∂C/∂f,
+// strain-inl.h) and the XPBD FEM tetrahedron (the unscaled energy gradient and C² = 2E,
+// fem-inl.h), each to take a division or a sum of squares off its path to the corrections.
+//
 // α̃ is α · (1/dt²): the reciprocal is the same for every lane and batch, so the batch loop
 // makes it once (TimeStep) and each batch multiplies, where it divided per batch before (the
 // scalar API makes it per call).

@@ -552,6 +552,14 @@ TEST(XPBDFEMTetra, InvalidInputLeavesTheMultiplierUnchanged) {
   EXPECT_FALSE(solve_xpbd(p, {1, 1, 1, 1}, t, Real(-1), Real(0.01), lambda).ok);
   EXPECT_FALSE(solve_xpbd(p, {0, 0, 0, 0}, t, Real(1e-4), Real(0.01), lambda).ok);
   EXPECT_EQ(lambda, Real(-0.25));
+  // NaN positions: no rest shape, so false, with zero corrections and λ unchanged.
+  std::array<Vector3r, 4> not_a_number = p;
+  not_a_number[1].x() = std::numeric_limits<Real>::quiet_NaN();
+  const XpbdResult nan_result =
+      solve_xpbd(not_a_number, {1, 1, 1, 1}, t, Real(1e-4), Real(0.01), lambda);
+  EXPECT_FALSE(nan_result.ok);
+  EXPECT_EQ(lambda, Real(-0.25));
+  for (const auto& c : nan_result.corr) EXPECT_EQ(c, Vector3r::Zero());
   // At rest the gradient is undefined: zero corrections, true, λ unchanged.
   const XpbdResult rest = solve_xpbd(t.p, {1, 1, 1, 1}, t, Real(1e-4), Real(0.01), lambda);
   EXPECT_TRUE(rest.ok);

@@ -225,7 +225,10 @@ HWY_INLINE Mask<V> fem_tetra_xpbd(const Vec3<V> (&p)[4], const V (&w)[4], V volu
   const Mask<V> projected = mask_and(valid, mask_and(is_finite(denominator), is_finite(t)));
   lambda_xpbd = lambda_xpbd + select(projected, t * C, zero<V>());
   for (int i = 0; i < 4; ++i) corr[i] = keep_if(projected, element.gradient[i] * (t * w[i]));
-  return mask_or(projected, mask_and(inputs_valid, mask_not(has_gradient)));
+  // At rest: no gradient to follow, and nothing to do. A NaN energy (NaN positions) fails
+  // `C > tol` too, but is no rest shape.
+  const Mask<V> at_rest = mask_and(is_finite(element.energy), mask_not(has_gradient));
+  return mask_or(projected, mask_and(inputs_valid, at_rest));
 }
 
 /// PBD FEM triangle (orthotropic plane stress), m[k][j] = invRestMat(k, j). Returns the lanes

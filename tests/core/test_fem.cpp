@@ -567,6 +567,30 @@ TEST(XPBDFEMTetra, InvalidInputLeavesTheMultiplierUnchanged) {
   for (const auto& c : rest.corr) EXPECT_EQ(c, Vector3r::Zero());
 }
 
+// The rest test is on the strain, not on C = sqrt(2 V ψ₁), which scales with sqrt(V): a
+// millimetre element strained by 1 % is projected (in float, C ≈ 1e-7 is below the tolerance).
+TEST(XPBDFEMTetra, ASmallElementStrainedByOnePercentIsProjected) {
+  Random random(45);
+  const RestTet unit = random_rest_tet(random);
+  for (const Real size : {Real(1), Real(1e-3)}) {
+    std::array<Vector3r, 4> rest;
+    for (int i = 0; i < 4; ++i) rest[i] = unit.p[i] * size;
+    RestTet t;
+    t.p = rest;
+    ASSERT_TRUE(PBD::init_FEMTetraConstraint(rest[0], rest[1], rest[2], rest[3], t.volume,
+                                             t.inv_rest));
+    std::array<Vector3r, 4> p = rest;
+    for (auto& x : p) x.x() *= Real(1.01);
+    Real lambda = 0;
+    const XpbdResult r = solve_xpbd(p, {1, 1, 1, 1}, t, Real(1e-4), Real(0.01), lambda);
+    EXPECT_TRUE(r.ok) << size;
+    EXPECT_NE(lambda, Real(0)) << size;
+    Real moved = 0;
+    for (const auto& c : r.corr) moved += c.norm();
+    EXPECT_GT(moved, 0) << size;
+  }
+}
+
 // Σ w |∇E|² grows as the cube of C: an element stretched so far that it overflows (float;
 // double's range holds these) is left alone, never reported projected with a zero or NaN step.
 TEST(XPBDFEMTetra, AnOverflowingStretchIsLeftAloneNotSteppedByZero) {

@@ -20,7 +20,7 @@
 //   c_xx = E_x/(1 - ν_xyν_yx), c_yy = E_y/(1 - ν_xyν_yx), c_xy = ½(ν_yx E_x + ν_xy E_y)/(1 - ν_xyν_yx),
 //   C = A ½ (ε_xx S_xx + ε_yy S_yy + 2 ε_xy S_xy),  H = A F S Mᵀ (3×2),
 //   ∇_{p1}, ∇_{p2} = columns of H,  ∇_{p0} = -(∇_{p1} + ∇_{p2}).
-// At the rest shape (every |ε_ij| ≤ kDegenerateTolerance; XPBD: C ≤ kDegenerateTolerance)
+// At the rest shape (every |ε_ij| ≤ kDegenerateTolerance; XPBD: C ≤ kDegenerateTolerance·√V0)
 // there is nothing to project: zero corrections, and the lane counts as projected.
 #if defined(TESSERA_CORE_KERNELS_FEM_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef TESSERA_CORE_KERNELS_FEM_INL_H_
@@ -209,7 +209,10 @@ HWY_INLINE Mask<V> fem_tetra_xpbd(const Vec3<V> (&p)[4], const V (&w)[4], V volu
   // ψ₁ ≥ 0 for a valid ν; the clamp only absorbs round-off.
   const V two_energy = splat<V>(2.0) * lane_max(element.energy, zero<V>());
   const V C = lane_sqrt(two_energy);
-  const Mask<V> has_gradient = C > splat<V>(kDegenerateTolerance);
+  // At rest when ψ₁ ≤ tol²/2, i.e. 2E ≤ tol² V0: C = sqrt(2 V0 ψ₁) scales with sqrt(V0), so
+  // a test on C alone would leave a millimetre element unprojected up to strains of a few
+  // per cent in float.
+  const Mask<V> has_gradient = two_energy > degenerate_denominator<V>() * volume;
   ConstraintValue<V, 4> energy_gradient;  // only its gradients are read: ∇E, not ∇C
   for (int i = 0; i < 4; ++i) energy_gradient.gradient[i] = element.gradient[i];
   const V weighted_energy = weighted_gradient_norm(energy_gradient, w);  // Σ w |∇E|²

@@ -70,7 +70,8 @@ class XPBD {
   /// Young's modulus 1 and the given Poisson ratio. Writing it as ½ α⁻¹ C² gives
   ///   C = sqrt(2 V ψ₁(F)),   ∇C = V ∇ψ₁ / C,   α = compliance = 1 / E.
   /// handleInversion selects the inversion-robust material as in the PBD form. At the rest
-  /// shape (C below the degenerate tolerance) the gradient is undefined: the corrections are
+  /// shape (ψ₁ ≤ tol²/2, i.e. C ≤ tol · sqrt(V) with tol the degenerate tolerance, whatever the
+  /// element's size) the gradient is undefined: the corrections are
   /// zero and true is returned (λ unchanged). Returns false for ν ∉ (-1, 0.5) or
   /// restVolume ≤ 0, besides the shared cases (dt ≤ 0, negative compliance, degenerate
   /// gradient). The reference takes (youngsModulus, poissonRatio) where this takes

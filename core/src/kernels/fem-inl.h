@@ -188,50 +188,33 @@ HWY_INLINE Mask<V> fem_tetra_pbd(const Vec3<V> (&p)[4], const V (&w)[4], V volum
 }
 
 /// XPBD FEM tetrahedron (λ updated in the projected lanes only). step is the loop's
-/// TimeStep::of(dt), made once per loop over batches.
-///
-/// With C = sqrt(2E) (E = V0 ψ₁) and ∇C = ∇E / C, the XPBD rule (projection-inl.h) is written
-/// with the unscaled ∇E and C² = 2E, so 1/C leaves the path from E to the corrections:
-///   t = (−C − α̃ λ) C / (Σ_i w_i |∇_i E|² + α̃ 2E),   Δλ = t C,   Δp_i = t w_i ∇_i E,
-/// the same Δλ and Δp as (−C − α̃ λ) / (Σ_i w_i |∇_i C|² + α̃) and Δλ w_i ∇_i C, and the
-/// lanes it projects are those where Σ_i w_i |∇_i C|² = Σ_i w_i |∇_i E|² / 2E would pass.
+/// TimeStep::of(dt), made once per loop over batches. C = sqrt(2E) with E = V0 ψ₁ and
+/// ∇C = ∇E / C, projected in its energy form (projection-inl.h, EnergyValue), which keeps 1/C
+/// off the path from E to the corrections.
 template <class V>
 HWY_INLINE Mask<V> fem_tetra_xpbd(const Vec3<V> (&p)[4], const V (&w)[4], V volume,
                                   const Mat3<V>& rest_inverse, V nu, V compliance,
                                   const TimeStep<V>& step, bool handle_inversion,
                                   V& lambda_xpbd, Vec3<V> (&corr)[4]) {
-  const Mask<V> inputs_valid = mask_and(mask_and(valid_poisson_ratio(nu), volume > zero<V>()),
-                                        xpbd_inputs_valid(step, compliance));
+  const Mask<V> material_valid = mask_and(valid_poisson_ratio(nu), volume > zero<V>());
   V mu, lambda;
-  lame_parameters(splat<V>(1.0), nu, inputs_valid, mu, lambda);
+  lame_parameters(splat<V>(1.0), nu, material_valid, mu, lambda);
   const TetraEnergy<V> element =
       fem_tetra_energy(p, volume, rest_inverse, mu, lambda, handle_inversion);
+  EnergyValue<V, 4> value;
   // ψ₁ ≥ 0 for a valid ν; the clamp only absorbs round-off.
-  const V two_energy = splat<V>(2.0) * lane_max(element.energy, zero<V>());
-  const V C = lane_sqrt(two_energy);
+  value.squared_C = splat<V>(2.0) * lane_max(element.energy, zero<V>());
+  value.C = lane_sqrt(value.squared_C);
+  for (int i = 0; i < 4; ++i) value.energy_gradient[i] = element.gradient[i];
   // At rest when ψ₁ ≤ tol²/2, i.e. 2E ≤ tol² V0: C = sqrt(2 V0 ψ₁) scales with sqrt(V0), so
   // a test on C alone would leave a millimetre element unprojected up to strains of a few
-  // per cent in float.
-  const Mask<V> has_gradient = two_energy > degenerate_denominator<V>() * volume;
-  ConstraintValue<V, 4> energy_gradient;  // only its gradients are read: ∇E, not ∇C
-  for (int i = 0; i < 4; ++i) energy_gradient.gradient[i] = element.gradient[i];
-  const V weighted_energy = weighted_gradient_norm(energy_gradient, w);  // Σ w |∇E|²
-  const V alpha_tilde = scaled_compliance(compliance, step);
-  const Mask<V> valid = mask_and(
-      mask_and(mask_and(inputs_valid, has_gradient), is_finite(C)),
-      mask_and(weighted_energy > degenerate_denominator<V>() * two_energy,
-               xpbd_inputs_valid(step, compliance, alpha_tilde)));
-  const V denominator = weighted_energy + alpha_tilde * two_energy;
-  const V t = safe_divide((zero<V>() - C - alpha_tilde * lambda_xpbd) * C, denominator, valid);
-  // |∇E|² grows as the cube of C's: a lane whose denominator or step overflowed (a float
-  // element stretched about a million times) is left alone rather than stepped by 0 or NaN.
-  const Mask<V> projected = mask_and(valid, mask_and(is_finite(denominator), is_finite(t)));
-  lambda_xpbd = lambda_xpbd + select(projected, t * C, zero<V>());
-  for (int i = 0; i < 4; ++i) corr[i] = keep_if(projected, element.gradient[i] * (t * w[i]));
-  // At rest: no gradient to follow, and nothing to do. A NaN energy (NaN positions) fails
-  // `C > tol` too, but is no rest shape.
-  const Mask<V> at_rest = mask_and(is_finite(element.energy), mask_not(has_gradient));
-  return mask_or(projected, mask_and(inputs_valid, at_rest));
+  // per cent in float. A NaN energy (NaN positions) is neither moving nor at rest.
+  const Mask<V> moving = value.squared_C > degenerate_denominator<V>() * volume;
+  const Mask<V> at_rest = mask_and(is_finite(element.energy), mask_not(moving));
+  value.valid = mask_and(material_valid, moving);
+  const Mask<V> projected = project_xpbd(value, w, compliance, step, lambda_xpbd, corr);
+  return mask_or(projected,
+                 mask_and(mask_and(material_valid, at_rest), xpbd_inputs_valid(step, compliance)));
 }
 
 /// PBD FEM triangle (orthotropic plane stress), m[k][j] = invRestMat(k, j). Returns the lanes

@@ -8,10 +8,12 @@
 // Both return the mask of lanes that were projected; every other lane gets zero corrections
 // (and an unchanged λ). A static particle (w = 0) always gets exactly zero.
 //
-// Two families write these rules out in forms that are equal in exact arithmetic and keep the
-// same contract: the strain sub-constraints (Σ w|∇C|² as a quadratic form in ∂C/∂f,
-// strain-inl.h) and the XPBD FEM tetrahedron (the unscaled energy gradient and C² = 2E,
-// fem-inl.h), each to take a division or a sum of squares off its path to the corrections.
+// Two other forms, equal in exact arithmetic and with the same contract, take a division or a
+// sum of squares off a family's path to its corrections:
+// - a constraint C = sqrt(2E) of an energy E (the XPBD FEM tetrahedron) returns an EnergyValue:
+//   ∇E and C² = 2E, not ∇C = ∇E / C (see project_xpbd for it below);
+// - the strain sub-constraints give Σ w|∇C|² as a quadratic form in ∂C/∂f (strain-inl.h) and
+//   take the PBD multiplier and mask from pbd_multiplier.
 //
 // α̃ is α · (1/dt²): the reciprocal is the same for every lane and batch, so the batch loop
 // makes it once (TimeStep) and each batch multiplies, where it divided per batch before (the
@@ -58,17 +60,33 @@ struct DirectionValue {
   Mask<V> valid;
 };
 
+/// C = sqrt(2E) of an energy E, given by ∇E and C² = 2E rather than ∇C = ∇E / C (see
+/// project_xpbd for it), and the lanes where the formula is defined.
+template <class V, int N>
+struct EnergyValue {
+  V C;
+  V squared_C;                  // 2E
+  Vec3<V> energy_gradient[N];   // ∇_i E = C ∇_i C
+  Mask<V> valid;
+};
+
 /// Lanes whose value is finite (x - x is 0 only for finite x).
 template <class V>
 HWY_INLINE Mask<V> is_finite(V x) {
   return (x - x) == zero<V>();
 }
 
+/// Σ_i w_i |g_i|².
+template <class V, int N>
+HWY_INLINE V weighted_squared_norm(const Vec3<V> (&g)[N], const V (&w)[N]) {
+  V sum = w[0] * squared_norm(g[0]);
+  for (int i = 1; i < N; ++i) sum = sum + w[i] * squared_norm(g[i]);
+  return sum;
+}
+
 template <class V, int N>
 HWY_INLINE V weighted_gradient_norm(const ConstraintValue<V, N>& value, const V (&w)[N]) {
-  V sum = w[0] * squared_norm(value.gradient[0]);
-  for (int i = 1; i < N; ++i) sum = sum + w[i] * squared_norm(value.gradient[i]);
-  return sum;
+  return weighted_squared_norm(value.gradient, w);
 }
 
 template <class V>
@@ -124,12 +142,19 @@ HWY_INLINE Mask<V> xpbd_valid(const Mask<V>& formula_valid, V C, V weighted,
                   xpbd_inputs_valid(step, compliance, alpha_tilde));
 }
 
+/// The PBD rule's multiplier s = k C / Σ w|∇C|² on the lanes it may project (`valid`, from
+/// pbd_valid and whatever the family adds), 0 elsewhere; Δp_i = -s w_i ∇_i C.
+template <class V>
+HWY_INLINE V pbd_multiplier(V stiffness, V C, V weighted, const Mask<V>& valid) {
+  return safe_divide(stiffness * C, weighted, valid);
+}
+
 template <class V, int N>
 HWY_INLINE Mask<V> project_pbd(const ConstraintValue<V, N>& value, const V (&w)[N],
                                V stiffness, Vec3<V> (&corr)[N]) {
   const V denominator = weighted_gradient_norm(value, w);
   const Mask<V> valid = pbd_valid(value.valid, value.C, denominator);
-  const V s = safe_divide(stiffness * value.C, denominator, valid);
+  const V s = pbd_multiplier(stiffness, value.C, denominator, valid);
   for (int i = 0; i < N; ++i) corr[i] = keep_if(valid, value.gradient[i] * (zero<V>() - s * w[i]));
   return valid;
 }
@@ -171,6 +196,31 @@ HWY_INLINE Mask<V> project_xpbd(const DirectionValue<V>& value, const V (&w)[2],
   corr[0] = keep_if(valid, value.difference * (t * w[0]));
   corr[1] = keep_if(valid, value.difference * (zero<V>() - t * w[1]));
   return valid;
+}
+
+/// The XPBD rule for C = sqrt(2E) with ∇C = ∇E / C, written with ∇E and C² = 2E so that 1/C
+/// leaves the path from E to the corrections:
+///   t = (−C − α̃ λ) C / (Σ_i w_i |∇_i E|² + α̃ C²),   Δλ = t C,   Δp_i = t w_i ∇_i E,
+/// the same Δλ and Δp as the rule at the top of this file; the lanes it may project are those
+/// where Σ_i w_i |∇_i C|² = Σ_i w_i |∇_i E|² / C² would pass. |∇E|² grows as the cube of C²: a
+/// lane whose denominator or step overflowed (a float element stretched about a million
+/// times) is left alone rather than stepped by 0 or NaN.
+template <class V, int N>
+HWY_INLINE Mask<V> project_xpbd(const EnergyValue<V, N>& value, const V (&w)[N], V compliance,
+                                const TimeStep<V>& step, V& lambda, Vec3<V> (&corr)[N]) {
+  const V weighted_energy = weighted_squared_norm(value.energy_gradient, w);
+  const V alpha_tilde = scaled_compliance(compliance, step);
+  const Mask<V> valid = mask_and(
+      mask_and(mask_and(value.valid, is_finite(value.C)),
+               weighted_energy > degenerate_denominator<V>() * value.squared_C),
+      xpbd_inputs_valid(step, compliance, alpha_tilde));
+  const V denominator = weighted_energy + alpha_tilde * value.squared_C;
+  const V t = safe_divide((zero<V>() - value.C - alpha_tilde * lambda) * value.C, denominator,
+                          valid);
+  const Mask<V> projected = mask_and(valid, mask_and(is_finite(denominator), is_finite(t)));
+  lambda = lambda + select(projected, t * value.C, zero<V>());
+  for (int i = 0; i < N; ++i) corr[i] = keep_if(projected, value.energy_gradient[i] * (t * w[i]));
+  return projected;
 }
 
 }  // namespace HWY_NAMESPACE

@@ -105,7 +105,8 @@ HWY_INLINE StrainValue<V> strain_sub_constraint(const Vec3<V> (&p)[Dim + 1],
 /// sub-constraint a small quadratic form in its derivatives,
 ///   Σ_i w_i |∇_i C|² = |∂C/∂f_a|² Q_aa + 2 (∂C/∂f_a · ∂C/∂f_b) Q_ab + |∂C/∂f_b|² Q_bb,
 /// built once per element from w and M alone, so no sub-constraint sums the N gradients'
-/// squares on its path from C to its correction.
+/// squares on its path from C to its correction. q[a][a] holds Q_aa and q[a][b] (a ≠ b) the
+/// cross term's 2 Q_ab.
 template <int Dim, class V>
 HWY_INLINE void strain_chain_weights(const V (&w)[Dim + 1], const V (&m)[Dim][Dim],
                                      V (&q)[Dim][Dim]) {
@@ -120,8 +121,8 @@ HWY_INLINE void strain_chain_weights(const V (&w)[Dim + 1], const V (&m)[Dim][Di
     for (int b = a; b < Dim; ++b) {
       V sum = weighted_c0[a] * c0[b];
       for (int k = 0; k < Dim; ++k) sum = sum + w[k + 1] * m[k][a] * m[k][b];
-      q[a][b] = sum;
-      q[b][a] = sum;
+      q[a][b] = a == b ? sum : sum + sum;
+      q[b][a] = q[a][b];
     }
   }
 }
@@ -159,13 +160,13 @@ HWY_INLINE Mask<V> project_strain(Vec3<V> (&p)[Dim + 1], const V (&w)[Dim + 1],
       // whose movable vertices' gradients vanish, Q singular by pinned vertices) the sum is
       // rounding noise of their size, and the lane counts as degenerate.
       const V squares = weighted + squared_norm(value.d_second) * q[b][b];
-      weighted = squares + dot(value.d_first, value.d_second) * (q[a][b] + q[a][b]);
+      weighted = squares + dot(value.d_first, value.d_second) * q[a][b];
       projected = mask_and(pbd_valid(value.valid, value.C, weighted),
                            weighted > squares * splat<V>(kStrainFormRoundOff));
     } else {
       projected = pbd_valid(value.valid, value.C, weighted);
     }
-    const V scale = safe_divide(stiffness[s] * value.C, weighted, projected);
+    const V scale = pbd_multiplier(stiffness[s], value.C, weighted, projected);
     // ∇_{p_{k+1}} C = ∂C/∂f_a M_ka + ∂C/∂f_b M_kb, ∇_{p0} C = -Σ_k ∇_{p_{k+1}} C;
     // Δp_i = -s w_i ∇_i C.
     Vec3<V> gradient0 = Vec3<V>::zeros();

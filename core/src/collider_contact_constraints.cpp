@@ -27,7 +27,8 @@ HWY_INLINE Vec3<RealLanes> load_vec3(const std::array<AlignedVector<Real>, 3>& a
 }  // namespace
 
 void ProjectColliderContacts(ParticleArrays particles, ColliderContacts& contacts,
-                             std::size_t begin, std::size_t end) {
+                             std::size_t begin, std::size_t end,
+                             bool lambda_starts_at_zero) {
   const RealTag d;
   const ParticleIndex* slot[1];
   constraint_slots(contacts.particles, slot);
@@ -37,7 +38,7 @@ void ProjectColliderContacts(ParticleArrays particles, ColliderContacts& contact
     Vec3<RealLanes> p[1];
     RealLanes w[1];
     gather_constraint_particles<1>(particles, slot, i, end, gathered, p, w);
-    RealLanes lambda = load(contacts.lambda.data(), i);
+    RealLanes lambda = lambda_starts_at_zero ? hn::Zero(d) : load(contacts.lambda.data(), i);
     const auto solved = collider_contact_position_solve(
         w[0], p[0], load_vec3(contacts.normal, i), load(contacts.offset.data(), i),
         load_vec3(contacts.anchor, i), load(contacts.static_friction.data(), i),
@@ -172,10 +173,12 @@ ColliderContacts make_collider_contacts(const ColliderContactInput& input) {
 }
 
 void project_collider_contacts(ParticleArrays particles, ColliderContacts& contacts,
-                               std::size_t begin, std::size_t end) {
+                               std::size_t begin, std::size_t end,
+                               const ProjectionSettings& settings) {
   check_projection_range(ColliderContacts::kFamily, begin, end, contacts.size(),
                          contacts.particles.particle_count, particles);
-  HWY_DYNAMIC_DISPATCH(ProjectColliderContacts)(particles, contacts, begin, end);
+  HWY_DYNAMIC_DISPATCH(ProjectColliderContacts)(particles, contacts, begin, end,
+                                                settings.lambda_starts_at_zero);
 }
 
 void solve_collider_contact_velocities(ParticleArrays velocities,

@@ -22,12 +22,13 @@ namespace HWY_NAMESPACE {
 template <bool kCompliance, bool kHandleInversion>
 HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
                                           FEMTetraConstraints& constraints, std::size_t begin,
-                                          std::size_t end, Real time_step) {
+                                          std::size_t end, const ProjectionSettings& settings) {
   const RealTag d;
   const std::size_t lanes = hn::Lanes(d);
   const ParticleIndex* slot[4];
   constraint_slots(constraints.particles, slot);
-  const auto step = TimeStep<RealLanes>::of(hn::Set(d, time_step));
+  const auto step = TimeStep<RealLanes>::of(hn::Set(d, settings.dt));
+  const bool lambda_starts_at_zero = settings.lambda_starts_at_zero;
   // The arrays' addresses, read once: the scatter's vector stores may alias anything, so
   // through `constraints` each batch would reload them.
   const Real* rest_inverse_entry[9];
@@ -54,7 +55,7 @@ HWY_NOINLINE void project_fem_tetra_lanes(ParticleArrays particles,
     const RealLanes poisson = hn::LoadU(d, poisson_of + i);
     Vec3<RealLanes> corr[4];
     if constexpr (kCompliance) {
-      RealLanes lambda = hn::LoadU(d, lambda_of + i);
+      RealLanes lambda = lambda_starts_at_zero ? hn::Zero(d) : hn::LoadU(d, lambda_of + i);
       fem_tetra_xpbd(p, w, volume, rest_inverse, poisson, hn::LoadU(d, compliance_of + i), step,
                      kHandleInversion, lambda, corr);
       store_active(lambda, active_count, lambda_of + i);
@@ -72,14 +73,14 @@ void ProjectFEMTetraConstraints(ParticleArrays particles, FEMTetraConstraints& c
   const bool compliance = settings.semantics == ConstraintSemantics::compliance;
   if (compliance) {
     if (constraints.handle_inversion)
-      project_fem_tetra_lanes<true, true>(particles, constraints, begin, end, settings.dt);
+      project_fem_tetra_lanes<true, true>(particles, constraints, begin, end, settings);
     else
-      project_fem_tetra_lanes<true, false>(particles, constraints, begin, end, settings.dt);
+      project_fem_tetra_lanes<true, false>(particles, constraints, begin, end, settings);
   } else {
     if (constraints.handle_inversion)
-      project_fem_tetra_lanes<false, true>(particles, constraints, begin, end, settings.dt);
+      project_fem_tetra_lanes<false, true>(particles, constraints, begin, end, settings);
     else
-      project_fem_tetra_lanes<false, false>(particles, constraints, begin, end, settings.dt);
+      project_fem_tetra_lanes<false, false>(particles, constraints, begin, end, settings);
   }
 }
 

@@ -94,13 +94,15 @@ void InitParticleTetContacts(ParticleArrays velocities, ParticleTetContacts& con
 }
 
 void ProjectParticleTetContacts(ParticleArrays particles, ParticleTetContacts& contacts,
-                                std::size_t begin, std::size_t end) {
+                                std::size_t begin, std::size_t end,
+                                bool lambda_starts_at_zero) {
   const RealTag d;
   for (std::size_t i = begin; i < end; i += hn::Lanes(d)) {
     const std::size_t active_count = end - i;
     const LaneMask active = hn::FirstN(d, active_count);
     const ContactLanes p = gather_contact(particles, contacts, i, end);
-    RealLanes lambda = hn::LoadU(d, contacts.lambda.data() + i);
+    RealLanes lambda =
+        lambda_starts_at_zero ? hn::Zero(d) : hn::LoadU(d, contacts.lambda.data() + i);
     const auto correction = contact_position_solve(
         p.particle.inverse_mass, p.w, p.particle.position, p.x,
         load_vec3(contacts.barycentric, i), load_vec3(contacts.normal, i),
@@ -245,10 +247,12 @@ ParticleTetContacts make_particle_tet_contacts(const ParticleTetContactInput& in
 }
 
 void project_particle_tet_contacts(ParticleArrays particles, ParticleTetContacts& contacts,
-                                   std::size_t begin, std::size_t end) {
+                                   std::size_t begin, std::size_t end,
+                                   const ProjectionSettings& settings) {
   check_projection_range(ParticleTetContacts::kFamily, begin, end, contacts.size(),
                          contacts.particles.particle_count, particles);
-  HWY_DYNAMIC_DISPATCH(ProjectParticleTetContacts)(particles, contacts, begin, end);
+  HWY_DYNAMIC_DISPATCH(ProjectParticleTetContacts)(particles, contacts, begin, end,
+                                                   settings.lambda_starts_at_zero);
 }
 
 void solve_particle_tet_contact_velocities(ParticleArrays velocities,

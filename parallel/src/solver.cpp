@@ -131,6 +131,7 @@ template <class Batch>
 void zero_lambda_range(Batch& batch, std::size_t begin, std::size_t end) {
   if (Real* lambda = lambda_of(batch)) std::fill(lambda + begin, lambda + end, Real(0));
 }
+
 template <ConstraintFamily Family>
 void zero_lambdas(ConstraintSets& sets, std::size_t begin, std::size_t end) {
   zero_lambda_range(sets.get<Family>(), begin, end);
@@ -702,8 +703,18 @@ void Solver::project_range(const ParticleArrays& particles, StageSet set, Constr
                            std::size_t begin, std::size_t end,
                            const ProjectionSettings& projection, bool first_iteration) {
   ConstraintSets& sets = batches_of(set);
-  if (fresh_lambdas_ && set == StageSet::coloured && first_iteration)
+  if (fresh_lambdas_ && set == StageSet::coloured && first_iteration) {
+    // The substep's λ reset. Under compliance semantics every family with λ stores it, so
+    // the kernel starts from 0 without reading it; under stiffness semantics only the
+    // contacts do, and the range is zeroed as a reset would.
+    if (projection.semantics == ConstraintSemantics::compliance) {
+      ProjectionSettings fresh = projection;
+      fresh.lambda_starts_at_zero = true;
+      kProjectBlock[std::size_t(f)](particles, sets, begin, end, fresh);
+      return;
+    }
     kZeroLambdas[std::size_t(f)](sets, begin, end);
+  }
   kProjectBlock[std::size_t(f)](particles, sets, begin, end, projection);
 }
 

@@ -227,6 +227,8 @@ TEST(ColliderContactBatch, PositionSolveMatchesScalarApiOnEveryTarget) {
           EXPECT_EQ(contacts.lambda[c], lambda_before[c]) << "λ outside the range changed";
         }
       }
+      test::expect_lambda_starting_at_zero_reads_no_lambda(
+          scene.state, contacts, begin, end, ProjectionSettings{}, project_collider_contacts);
     }
   });
 }

@@ -370,6 +370,10 @@ TEST(FEMTetraBatch, MatchesScalarApiOnEveryTarget) {
             EXPECT_EQ(constraints.lambda[c], Real(-0.125)) << "λ outside the range changed";
           }
         }
+        if (semantics == ConstraintSemantics::compliance)
+          test::expect_lambda_starting_at_zero_reads_no_lambda(
+              ParticleState(set.positions, set.inverse_masses), constraints, begin, end,
+              settings, project_fem_tetra_constraints);
       }
     }
   });

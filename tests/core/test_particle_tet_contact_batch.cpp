@@ -171,6 +171,9 @@ TEST(ParticleTetContactBatch, PositionSolveMatchesScalarApiOnEveryTarget) {
           EXPECT_EQ(contacts.lambda[c], lambda_before[c]) << "λ outside the range changed";
         }
       }
+      test::expect_lambda_starting_at_zero_reads_no_lambda(
+          scene.state, contacts, begin, end, ProjectionSettings{},
+          project_particle_tet_contacts);
     }
   });
 }

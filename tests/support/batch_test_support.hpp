@@ -8,6 +8,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstring>
 #include <functional>
 #include <initializer_list>
 #include <numeric>
@@ -195,6 +196,31 @@ std::string error_of(Make&& make) {
 //   build(set, random)      -> the family's batch          (make_<family>_constraints)
 //   project(particles, constraints, begin, end, settings)  (project_<family>_constraints)
 
+/// ProjectionSettings::lambda_starts_at_zero: projecting [begin, end) of `constraints` with it,
+/// whatever λ holds (here 0.75 everywhere), gives bitwise the positions and λ of projecting
+/// with λ = 0 stored in the range and without it; λ outside the range is untouched. project is
+/// called as project(particles, constraints, begin, end, settings).
+template <class Batch, class Project>
+void expect_lambda_starting_at_zero_reads_no_lambda(const ParticleState& state,
+                                                    const Batch& constraints, std::size_t begin,
+                                                    std::size_t end, ProjectionSettings settings,
+                                                    Project&& project) {
+  Batch reset = constraints, started = constraints;
+  std::fill(reset.lambda.begin(), reset.lambda.end(), Real(0.75));
+  std::fill(started.lambda.begin(), started.lambda.end(), Real(0.75));
+  std::fill(reset.lambda.begin() + long(begin), reset.lambda.begin() + long(end), Real(0));
+  ParticleState from_reset = state, from_start = state;
+  settings.lambda_starts_at_zero = false;
+  project(ParticleArrays::of(from_reset), reset, begin, end, settings);
+  settings.lambda_starts_at_zero = true;
+  project(ParticleArrays::of(from_start), started, begin, end, settings);
+  EXPECT_TRUE(same_bits(from_reset, from_start)) << "range [" << begin << ", " << end << ")";
+  EXPECT_EQ(std::memcmp(reset.lambda.data(), started.lambda.data(),
+                        reset.lambda.size() * sizeof(Real)),
+            0)
+      << "λ differ (range [" << begin << ", " << end << "))";
+}
+
 /// Batch against the scalar API for a family with both semantics (PBD stiffness and XPBD
 /// compliance with λ), on every SIMD target, for seeds 1..6 of 1..300 constraints projected
 /// over a random range from λ = 0.25: positions match scalar(set, constraints, begin, end,
@@ -230,6 +256,10 @@ void expect_batch_matches_scalar_with_lambda(MakeSet&& make_set, Build&& build,
             EXPECT_EQ(constraints.lambda[c], Real(0.25)) << "λ outside the range changed";
           }
         }
+        if (semantics == ConstraintSemantics::compliance)
+          expect_lambda_starting_at_zero_reads_no_lambda(
+              ParticleState(set.positions, set.inverse_masses), constraints, begin, end,
+              settings, project);
       }
     }
   });

@@ -65,7 +65,8 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
     const auto value = evaluate(position, i);
     Vec3<RealLanes> corr[N];
     if (compliance) {
-      RealLanes lambda = hn::LoadU(d, parameters.lambda + i);
+      RealLanes lambda = settings.lambda_starts_at_zero ? hn::Zero(d)
+                                                        : hn::LoadU(d, parameters.lambda + i);
       project_xpbd(value, w, hn::LoadU(d, parameters.compliance + i), step, lambda, corr);
       store_active(lambda, active_count, parameters.lambda + i);
     } else {

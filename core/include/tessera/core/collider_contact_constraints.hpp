@@ -87,11 +87,13 @@ ColliderContacts make_collider_contacts(const ColliderContactInput& input);
 /// not point into `out`.
 void make_collider_contacts(const ColliderContactInput& input, ColliderContacts& out);
 
-/// Position solve of contacts [begin, end) once (accumulating λ), W at a time on the active
-/// SIMD target, writing the corrected positions of movable particles (the range rules of
-/// every batched kernel, constraint_batch.hpp).
+/// Position solve of contacts [begin, end) once (accumulating λ; of `settings`, only
+/// lambda_starts_at_zero is read), W at a time on the active SIMD target, writing the
+/// corrected positions of movable particles (the range rules of every batched kernel,
+/// constraint_batch.hpp).
 void project_collider_contacts(ParticleArrays particles, ColliderContacts& contacts,
-                               std::size_t begin, std::size_t end);
+                               std::size_t begin, std::size_t end,
+                               const ProjectionSettings& settings = {});
 
 /// Velocity solve (restitution) of contacts [begin, end) after the velocity update of a
 /// substep. `velocities` as given by velocity_arrays_of (particle_state.hpp).

@@ -30,6 +30,10 @@ struct ProjectionSettings {
   ConstraintSemantics semantics = ConstraintSemantics::stiffness;
   /// The (sub)step's time step, used by compliance semantics (α̃ = α / dt²).
   Real dt = Real(1) / Real(60);
+  /// The multipliers λ of [begin, end) start this projection at 0: the kernel neither reads
+  /// nor needs them reset, and stores them as usual. A solver's first iteration of a substep
+  /// sets it rather than resetting λ in a pass of its own. Every family with λ honours it.
+  bool lambda_starts_at_zero = false;
 };
 
 /// How the tool draws a family's constraint as a cell of its frames (VTK): which slots make it.

@@ -77,12 +77,14 @@ ParticleTetContacts make_particle_tet_contacts(const ParticleTetContactInput& in
 void make_particle_tet_contacts(const ParticleTetContactInput& input, const ParticleState& state,
                                 ParticleTetContacts& out);
 
-/// Position solve of contacts [begin, end) once (accumulating λ), W at a time on the active
-/// SIMD target, writing the corrected positions of movable particles. The contacts of the
-/// range must share no movable particle; ranges solved concurrently must not share a block of
-/// kMaxLanes consecutive contacts.
+/// Position solve of contacts [begin, end) once (accumulating λ; of `settings`, only
+/// lambda_starts_at_zero is read), W at a time on the active SIMD target, writing the
+/// corrected positions of movable particles. The contacts of the range must share no movable
+/// particle; ranges solved concurrently must not share a block of kMaxLanes consecutive
+/// contacts.
 void project_particle_tet_contacts(ParticleArrays particles, ParticleTetContacts& contacts,
-                                   std::size_t begin, std::size_t end);
+                                   std::size_t begin, std::size_t end,
+                                   const ProjectionSettings& settings = {});
 
 /// Velocity solve (friction) of contacts [begin, end) after the velocity update of a substep
 /// of length dt: the normal impulse per unit time is λ / dt. `velocities` as given by

@@ -379,7 +379,8 @@ class Solver {
   void run_stage(const Stage& stage, const ProjectionSettings& projection);
   /// Projects constraints [begin, end) of family f of the set `set`: the one kernel call of
   /// the coloured phases, the phase regions and the part sweeps. With fresh_lambdas_, in a
-  /// solve's first iteration, the range's λ are zeroed first (see fresh_lambdas_).
+  /// solve's first iteration, the range's λ start at 0 (ProjectionSettings::
+  /// lambda_starts_at_zero, or zeroed first under stiffness semantics; see fresh_lambdas_).
   void project_range(const ParticleArrays& particles, StageSet set, ConstraintFamily f,
                      std::size_t begin, std::size_t end, const ProjectionSettings& projection);
   /// The same in a solve's first iteration or not, whatever the iteration under way.
@@ -443,10 +444,10 @@ class Solver {
   /// order) one iteration before the last, the iteration under way and its weight ω.
   std::array<AlignedVector<Real>, 3> chebyshev_previous_;
   std::size_t chebyshev_iteration_ = 0;
-  /// Set by step() for a substep whose first iteration zeroes the coloured set's λ range by
-  /// range, just before projecting them, instead of a pass of their own over λ (25 MB per
-  /// substep on the 1024² cloth, and two fork-joins on any scene). Not when a residual is
-  /// read before the iterations (it needs the λ = 0 of a fresh solve).
+  /// Set by step() for a substep whose first iteration starts the coloured set's λ at 0 range
+  /// by range, as it projects them, instead of a pass of their own over λ (25 MB per substep
+  /// on the 1024² cloth, and two fork-joins on any scene). Not when a residual is read before
+  /// the iterations (it needs the λ = 0 of a fresh solve).
   bool fresh_lambdas_ = false;
   Real chebyshev_weight_ = 1;
   std::size_t dynamic_count_ = 0;

@@ -202,7 +202,7 @@ HWY_INLINE Mask<V> project_xpbd(const DirectionValue<V>& value, const V (&w)[2],
 /// leaves the path from E to the corrections:
 ///   t = (−C − α̃ λ) C / (Σ_i w_i |∇_i E|² + α̃ C²),   Δλ = t C,   Δp_i = t w_i ∇_i E,
 /// the same Δλ and Δp as the rule at the top of this file; the lanes it may project are those
-/// where Σ_i w_i |∇_i C|² = Σ_i w_i |∇_i E|² / C² would pass. |∇E|² grows as the cube of C²: a
+/// where Σ_i w_i |∇_i C|² = Σ_i w_i |∇_i E|² / C² would pass. |∇E|² grows as C³: a
 /// lane whose denominator or step overflowed (a float element stretched about a million
 /// times) is left alone rather than stepped by 0 or NaN.
 template <class V, int N>

@@ -32,7 +32,9 @@ struct ProjectionSettings {
   Real dt = Real(1) / Real(60);
   /// The multipliers λ of [begin, end) start this projection at 0: the kernel neither reads
   /// nor needs them reset, and stores them as usual. A solver's first iteration of a substep
-  /// sets it rather than resetting λ in a pass of its own. Every family with λ honours it.
+  /// sets it rather than resetting λ in a pass of its own. The batched kernel
+  /// (project_constraints) of every family with λ honours it; project_sequentially does not
+  /// read it.
   bool lambda_starts_at_zero = false;
 };
 

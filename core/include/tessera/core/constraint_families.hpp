@@ -179,13 +179,13 @@ template <class Batch>
 inline constexpr bool kFixedArity = Batch::kTraits.arity > 0;
 
 /// The settings a family is projected with: a family without an XPBD form runs its PBD
-/// stiffness form under either semantics; the others as given.
+/// stiffness form under either semantics; the others as given. Every other setting is kept
+/// (lambda_starts_at_zero too: the contacts have λ and no XPBD form).
 template <class Batch>
 constexpr ProjectionSettings settings_for(const ProjectionSettings& settings) {
-  if constexpr (Batch::kTraits.xpbd)
-    return settings;
-  else
-    return {ConstraintSemantics::stiffness, settings.dt};
+  ProjectionSettings result = settings;
+  if constexpr (!Batch::kTraits.xpbd) result.semantics = ConstraintSemantics::stiffness;
+  return result;
 }
 
 /// The family's multipliers (nullptr for a family without them).

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -449,6 +450,45 @@ TEST(BoundaryTriangles, SharedFacesAreInside) {
   const std::vector<VertexIndex> faces = boundary_triangles(bar.tetrahedron_indices);
   // Each of the box's unit squares on its surface is split into 2 triangles.
   EXPECT_EQ(faces.size() / 3, 2u * 2u * (2 * 3 + 3 * 4 + 2 * 4));
+}
+
+/// The faces no other face shares, by counting every face's sorted vertices (the definition,
+/// written the slow way), in the function's order and orientation.
+std::vector<VertexIndex> boundary_by_counting(const std::vector<VertexIndex>& tetrahedra) {
+  constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  std::map<std::array<VertexIndex, 3>, int> count;
+  const auto key = [&](std::size_t f) {
+    std::array<VertexIndex, 3> k;
+    for (int i = 0; i < 3; ++i) k[std::size_t(i)] = tetrahedra[(f / 4) * 4 + kFaces[f % 4][i]];
+    std::sort(k.begin(), k.end());
+    return k;
+  };
+  for (std::size_t f = 0; f < tetrahedra.size(); ++f) ++count[key(f)];
+  std::vector<VertexIndex> faces;
+  for (std::size_t f = 0; f < tetrahedra.size(); ++f)
+    if (count[key(f)] == 1)
+      for (int i = 0; i < 3; ++i) faces.push_back(tetrahedra[(f / 4) * 4 + kFaces[f % 4][i]]);
+  return faces;
+}
+
+TEST(BoundaryTriangles, AVertexInManyTetrahedraAndAnyNumberingGiveTheFacesCounted) {
+  // A fan of 100 tetrahedra around the edge (0, 1000): tetrahedra k and k + 1 share a face,
+  // and vertex 0's faces (300) are more than a bucket compares pair by pair.
+  std::vector<VertexIndex> fan;
+  for (VertexIndex k = 0; k < 100; ++k) fan.insert(fan.end(), {0, k + 1, k + 2, 1000});
+  const std::vector<VertexIndex> fan_faces = boundary_triangles(fan);
+  EXPECT_EQ(fan_faces, boundary_by_counting(fan));
+  EXPECT_EQ(fan_faces.size() / 3, 4 * 100 - 2 * 99u);
+  // A bar, and the same bar numbered from a billion (far past the face count).
+  const TetrahedralBar bar = make_tetrahedral_bar(3, 4, 5);
+  EXPECT_EQ(boundary_triangles(bar.tetrahedron_indices),
+            boundary_by_counting(bar.tetrahedron_indices));
+  std::vector<VertexIndex> shifted = bar.tetrahedron_indices;
+  for (VertexIndex& v : shifted) v += 1'000'000'000;
+  EXPECT_EQ(boundary_triangles(shifted), boundary_by_counting(shifted));
+  // A face three tetrahedra share (not a manifold) is on no one's boundary.
+  const std::vector<VertexIndex> three = {0, 1, 2, 3, 0, 2, 1, 4, 0, 1, 2, 5};
+  EXPECT_EQ(boundary_triangles(three), boundary_by_counting(three));
 }
 
 }  // namespace scene_file_tests

@@ -486,8 +486,18 @@ TEST(BoundaryTriangles, AVertexInManyTetrahedraAndAnyNumberingGiveTheFacesCounte
   std::vector<VertexIndex> shifted = bar.tetrahedron_indices;
   for (VertexIndex& v : shifted) v += 1'000'000'000;
   EXPECT_EQ(boundary_triangles(shifted), boundary_by_counting(shifted));
-  // A face three tetrahedra share (not a manifold) is on no one's boundary.
-  const std::vector<VertexIndex> three = {0, 1, 2, 3, 0, 2, 1, 4, 0, 1, 2, 5};
+  // Numbered in multiples of the face count: every face in one bucket (more than a bucket
+  // compares pair by pair), under many different smallest vertices.
+  const TetrahedralBar small = make_tetrahedral_bar(1, 1, 2);
+  std::vector<VertexIndex> one_bucket = small.tetrahedron_indices;
+  for (VertexIndex& v : one_bucket) v *= VertexIndex(one_bucket.size());
+  EXPECT_EQ(boundary_triangles(one_bucket), boundary_by_counting(one_bucket));
+  // A face three tetrahedra share (not a manifold) is on no one's boundary, compared pair by
+  // pair and, numbered into one bucket with 30 more tetrahedra, sorted.
+  std::vector<VertexIndex> three = {0, 1, 2, 3, 0, 2, 1, 4, 0, 1, 2, 5};
+  EXPECT_EQ(boundary_triangles(three), boundary_by_counting(three));
+  for (VertexIndex k = 0; k < 30; ++k) three.insert(three.end(), {0, 10 + k, 50 + k, 90 + k});
+  for (VertexIndex& v : three) v *= VertexIndex(three.size());
   EXPECT_EQ(boundary_triangles(three), boundary_by_counting(three));
 }
 

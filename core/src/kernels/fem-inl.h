@@ -204,7 +204,6 @@ HWY_INLINE Mask<V> fem_tetra_xpbd(const Vec3<V> (&p)[4], const V (&w)[4], V volu
   EnergyValue<V, 4> value;
   // ψ₁ ≥ 0 for a valid ν; the clamp only absorbs round-off.
   value.squared_C = splat<V>(2.0) * lane_max(element.energy, zero<V>());
-  value.C = lane_sqrt(value.squared_C);
   for (int i = 0; i < 4; ++i) value.energy_gradient[i] = element.gradient[i];
   // At rest when ψ₁ ≤ tol²/2, i.e. 2E ≤ tol² V0: C = sqrt(2 V0 ψ₁) scales with sqrt(V0), so
   // a test on C alone would leave a millimetre element unprojected up to strains of a few

@@ -60,11 +60,10 @@ struct DirectionValue {
   Mask<V> valid;
 };
 
-/// C = sqrt(2E) of an energy E, given by ∇E and C² = 2E rather than ∇C = ∇E / C (see
+/// C = sqrt(2E) of an energy E, given by C² = 2E and ∇E rather than C and ∇C = ∇E / C (see
 /// project_xpbd for it), and the lanes where the formula is defined.
 template <class V, int N>
 struct EnergyValue {
-  V C;
   V squared_C;                  // 2E
   Vec3<V> energy_gradient[N];   // ∇_i E = C ∇_i C
   Mask<V> valid;
@@ -208,17 +207,17 @@ HWY_INLINE Mask<V> project_xpbd(const DirectionValue<V>& value, const V (&w)[2],
 template <class V, int N>
 HWY_INLINE Mask<V> project_xpbd(const EnergyValue<V, N>& value, const V (&w)[N], V compliance,
                                 const TimeStep<V>& step, V& lambda, Vec3<V> (&corr)[N]) {
+  const V C = lane_sqrt(value.squared_C);
   const V weighted_energy = weighted_squared_norm(value.energy_gradient, w);
   const V alpha_tilde = scaled_compliance(compliance, step);
   const Mask<V> valid = mask_and(
-      mask_and(mask_and(value.valid, is_finite(value.C)),
+      mask_and(mask_and(value.valid, is_finite(C)),
                weighted_energy > degenerate_denominator<V>() * value.squared_C),
       xpbd_inputs_valid(step, compliance, alpha_tilde));
   const V denominator = weighted_energy + alpha_tilde * value.squared_C;
-  const V t = safe_divide((zero<V>() - value.C - alpha_tilde * lambda) * value.C, denominator,
-                          valid);
+  const V t = safe_divide((zero<V>() - C - alpha_tilde * lambda) * C, denominator, valid);
   const Mask<V> projected = mask_and(valid, mask_and(is_finite(denominator), is_finite(t)));
-  lambda = lambda + select(projected, t * value.C, zero<V>());
+  lambda = lambda + select(projected, t * C, zero<V>());
   for (int i = 0; i < N; ++i) corr[i] = keep_if(projected, value.energy_gradient[i] * (t * w[i]));
   return projected;
 }

@@ -28,6 +28,7 @@
 #define TESSERA_CORE_KERNELS_BATCH_INL_H_
 #endif
 
+#include <algorithm>
 #include <cstdint>
 #include <utility>
 
@@ -349,14 +350,40 @@ HWY_INLINE void constraint_slots(const ConstraintParticles<N>& indices,
   for (int k = 0; k < N; ++k) slot[k] = indices.particle[std::size_t(k)].data();
 }
 
+/// Asks the caches for the N particles of constraints i .. min(i + W, end) ahead of their
+/// gather. A kernel whose formula is long (hundreds of instructions per W constraints) keeps
+/// the out-of-order window from reaching the next block's loads, so each block's gathers
+/// would otherwise wait for its particles' misses in turn.
+template <int N>
+HWY_INLINE void prefetch_constraint_particles(const ParticleArrays& particles,
+                                              const ParticleIndex* const* slot, std::size_t i,
+                                              std::size_t end) {
+  const std::size_t count = std::min(end - i, hn::Lanes(RealTag()));
+  for (int k = 0; k < N; ++k) {
+    for (std::size_t lane = 0; lane < count; ++lane) {
+      const std::size_t at = std::size_t(slot[k][i + lane]) * particles.stride;
+      __builtin_prefetch(particles.x + at);
+      if (!particles.interleaved()) {
+        __builtin_prefetch(particles.y + at);
+        __builtin_prefetch(particles.z + at);
+        __builtin_prefetch(particles.inverse_mass + at);
+      }
+    }
+  }
+}
+
 /// Gathers the N particles of constraints i .. i+W, slot by slot: gathered keeps what the
 /// scatter needs, position and w are the formula's inputs.
-template <int N>
+template <int N, std::size_t PrefetchBlocks = 0>
 HWY_INLINE void gather_constraint_particles(const ParticleArrays& particles,
                                             const ParticleIndex* const* slot, std::size_t i,
                                             std::size_t end, ParticleLanes (&gathered)[N],
                                             Vec3<RealLanes> (&position)[N],
                                             RealLanes (&w)[N]) {
+  if constexpr (PrefetchBlocks > 0) {
+    const std::size_t ahead = i + PrefetchBlocks * hn::Lanes(RealTag());
+    if (ahead < end) prefetch_constraint_particles<N>(particles, slot, ahead, end);
+  }
   // Unrolled so the N slots' lanes stay in registers (a rolled loop kept them in stack
   // arrays: seven 512-bit stores and reloads per slot on the distance kernel).
   HWY_UNROLL(16)

@@ -57,15 +57,11 @@ struct StrainValue {
   Mask<V> valid;
 };
 
-/// C and ∂C/∂f of one sub-constraint at positions p.
-template <int Dim, class V>
-HWY_INLINE StrainValue<V> strain_sub_constraint(const Vec3<V> (&p)[Dim + 1],
-                                                const V (&m)[Dim][Dim], StrainEntry entry,
-                                                bool normalize_stretch, bool normalize_shear) {
-  Vec3<V> edge[Dim];
-  for (int k = 0; k < Dim; ++k) edge[k] = p[k + 1] - p[0];
-  const Vec3<V> fa = strain_column<Dim>(edge, m, entry.first);
-
+/// C and ∂C/∂f of one sub-constraint from F's columns fa = f_first and fb = f_second.
+template <class V>
+HWY_INLINE StrainValue<V> strain_sub_constraint(const Vec3<V>& fa, const Vec3<V>& fb,
+                                                StrainEntry entry, bool normalize_stretch,
+                                                bool normalize_shear) {
   StrainValue<V> value;
   value.valid = all_lanes<V>();
   value.d_second = Vec3<V>::zeros();
@@ -80,7 +76,6 @@ HWY_INLINE StrainValue<V> strain_sub_constraint(const Vec3<V> (&p)[Dim + 1],
       value.d_first = fa * splat<V>(2.0);
     }
   } else {
-    const Vec3<V> fb = strain_column<Dim>(edge, m, entry.second);
     if (normalize_shear) {
       const V length_a = norm(fa), length_b = norm(fb);
       value.valid = mask_and(length_a > splat<V>(kDegenerateTolerance),
@@ -100,17 +95,16 @@ HWY_INLINE StrainValue<V> strain_sub_constraint(const Vec3<V> (&p)[Dim + 1],
   return value;
 }
 
-/// The chain rule's weights Q_ab = Σ_i w_i c_i^a c_i^b, where ∇_{p_i} C = Σ_a c_i^a ∂C/∂f_a
-/// with c_{k+1}^a = M_ka and c_0^a = -Σ_k M_ka. They make the PBD denominator of a
-/// sub-constraint a small quadratic form in its derivatives,
+/// The chain rule's coefficients and weights: ∇_{p_i} C = Σ_a c_i^a ∂C/∂f_a with
+/// c_{k+1}^a = M_ka and c_0^a = -Σ_k M_ka (returned in c0), and Q_ab = Σ_i w_i c_i^a c_i^b.
+/// They make the PBD denominator of a sub-constraint a small quadratic form in its derivatives,
 ///   Σ_i w_i |∇_i C|² = |∂C/∂f_a|² Q_aa + 2 (∂C/∂f_a · ∂C/∂f_b) Q_ab + |∂C/∂f_b|² Q_bb,
-/// built once per element from w and M alone, so no sub-constraint sums the N gradients'
-/// squares on its path from C to its correction. q[a][a] holds Q_aa and q[a][b] (a ≠ b) the
-/// cross term's 2 Q_ab.
+/// and carry its step from the particles to F (project_strain), both built once per element
+/// from w and M alone.
 template <int Dim, class V>
 HWY_INLINE void strain_chain_weights(const V (&w)[Dim + 1], const V (&m)[Dim][Dim],
-                                     V (&q)[Dim][Dim]) {
-  V c0[Dim], weighted_c0[Dim];
+                                     V (&c0)[Dim], V (&q)[Dim][Dim]) {
+  V weighted_c0[Dim];
   for (int a = 0; a < Dim; ++a) {
     V sum = m[0][a];
     for (int k = 1; k < Dim; ++k) sum = sum + m[k][a];
@@ -121,8 +115,8 @@ HWY_INLINE void strain_chain_weights(const V (&w)[Dim + 1], const V (&m)[Dim][Di
     for (int b = a; b < Dim; ++b) {
       V sum = weighted_c0[a] * c0[b];
       for (int k = 0; k < Dim; ++k) sum = sum + w[k + 1] * m[k][a] * m[k][b];
-      q[a][b] = a == b ? sum : sum + sum;
-      q[b][a] = q[a][b];
+      q[a][b] = sum;
+      q[b][a] = sum;
     }
   }
 }
@@ -135,24 +129,38 @@ inline constexpr double kStrainFormRoundOff = 8 * 1.1920928955078125e-07;
 /// Projects the Count sub-constraints in order (entries[s] with stiffness[s]) with the PBD rule
 /// (projection-inl.h) and writes the summed corrections. Returns the lanes where no active
 /// sub-constraint was degenerate; every other lane gets zero corrections.
+///
+/// The particles are not moved between sub-constraints; F is. A sub-constraint with multiplier
+/// s (D_a = ∂C/∂f_a) moves p_i by Δp_i = -s w_i Σ_a c_i^a D_a, and F is linear in the
+/// particles, f_j = Σ_i c_i^j p_i, so its columns move by
+///   Δf_j = Σ_i c_i^j Δp_i = -s Σ_a Q_ja D_a,
+/// and the element's corrections are those of the summed steps G_a = Σ_s s D_a:
+///   Δp_{k+1} = -w_{k+1} Σ_a M_ka G_a,   Δp_0 = -w_0 Σ_a c_0^a G_a.
+/// This is the Gauss–Seidel of the scalar API in exact arithmetic (it rounds differently), at
+/// about half the work per sub-constraint: no edges, columns or particles recomputed in between.
 template <int Dim, int Count, class V>
-HWY_INLINE Mask<V> project_strain(Vec3<V> (&p)[Dim + 1], const V (&w)[Dim + 1],
+HWY_INLINE Mask<V> project_strain(const Vec3<V> (&p)[Dim + 1], const V (&w)[Dim + 1],
                                   const V (&m)[Dim][Dim], const StrainEntry (&entries)[Count],
                                   const V (&stiffness)[Count], bool normalize_stretch,
                                   bool normalize_shear, Vec3<V> (&corr)[Dim + 1]) {
-  constexpr int N = Dim + 1;
-  V q[Dim][Dim];
-  strain_chain_weights<Dim>(w, m, q);
+  V c0[Dim], q[Dim][Dim];
+  strain_chain_weights<Dim>(w, m, c0, q);
+  Vec3<V> edge[Dim];
+  for (int k = 0; k < Dim; ++k) edge[k] = p[k + 1] - p[0];
+  Vec3<V> f[Dim], step_sum[Dim];
+  for (int j = 0; j < Dim; ++j) {
+    f[j] = strain_column<Dim>(edge, m, j);
+    step_sum[j] = Vec3<V>::zeros();
+  }
   Mask<V> ok = all_lanes<V>();
-  for (int i = 0; i < N; ++i) corr[i] = Vec3<V>::zeros();
   // Unrolled, so each sub-constraint's columns a, b are constants: a rolled loop indexed M and
   // Q in stack arrays at run time (double, AVX-512).
   static_assert(Count <= 8, "HWY_UNROLL below unrolls up to 8 sub-constraints");
   HWY_UNROLL(8)
   for (int s = 0; s < Count; ++s) {
     const int a = entries[s].first, b = entries[s].second;
-    const auto value = strain_sub_constraint<Dim>(p, m, entries[s], normalize_stretch,
-                                                  normalize_shear);
+    const auto value = strain_sub_constraint(f[a], f[b], entries[s], normalize_stretch,
+                                             normalize_shear);
     V weighted = squared_norm(value.d_first) * q[a][a];
     Mask<V> projected;
     if (a != b) {
@@ -160,31 +168,36 @@ HWY_INLINE Mask<V> project_strain(Vec3<V> (&p)[Dim + 1], const V (&w)[Dim + 1],
       // whose movable vertices' gradients vanish, Q singular by pinned vertices) the sum is
       // rounding noise of their size, and the lane counts as degenerate.
       const V squares = weighted + squared_norm(value.d_second) * q[b][b];
-      weighted = squares + dot(value.d_first, value.d_second) * q[a][b];
+      const V cross = dot(value.d_first, value.d_second) * q[a][b];
+      weighted = squares + (cross + cross);
       projected = mask_and(pbd_valid(value.valid, value.C, weighted),
                            weighted > squares * splat<V>(kStrainFormRoundOff));
     } else {
       projected = pbd_valid(value.valid, value.C, weighted);
     }
     const V scale = pbd_multiplier(stiffness[s], value.C, weighted, projected);
-    // ∇_{p_{k+1}} C = ∂C/∂f_a M_ka + ∂C/∂f_b M_kb, ∇_{p0} C = -Σ_k ∇_{p_{k+1}} C;
-    // Δp_i = -s w_i ∇_i C.
-    Vec3<V> gradient0 = Vec3<V>::zeros();
-    for (int k = 0; k < Dim; ++k) {
-      Vec3<V> gradient = value.d_first * m[k][a];
-      if (a != b) gradient += value.d_second * m[k][b];
-      gradient0 -= gradient;
-      const Vec3<V> step = keep_if(projected, gradient * (zero<V>() - scale * w[k + 1]));
-      p[k + 1] += step;
-      corr[k + 1] += step;
+    // s D_a and s D_b on the projected lanes (a lane left out may hold a non-finite D).
+    const Vec3<V> step_a = keep_if(projected, value.d_first * scale);
+    step_sum[a] += step_a;
+    if (a != b) {
+      const Vec3<V> step_b = keep_if(projected, value.d_second * scale);
+      step_sum[b] += step_b;
+      for (int j = 0; j < Dim; ++j) f[j] -= step_a * q[j][a] + step_b * q[j][b];
+    } else {
+      for (int j = 0; j < Dim; ++j) f[j] -= step_a * q[j][a];
     }
-    const Vec3<V> step0 = keep_if(projected, gradient0 * (zero<V>() - scale * w[0]));
-    p[0] += step0;
-    corr[0] += step0;
     // A zero-stiffness sub-constraint is skipped (its step is zero whatever it computed).
     ok = mask_and(ok, mask_or(projected, stiffness[s] == zero<V>()));
   }
-  for (int i = 0; i < N; ++i) corr[i] = keep_if(ok, corr[i]);
+  // ∇_{p_{k+1}} = Σ_a M_ka G_a, ∇_{p0} = Σ_a c_0^a G_a; Δp_i = -w_i ∇_i.
+  Vec3<V> gradient0 = step_sum[0] * c0[0];
+  for (int a = 1; a < Dim; ++a) gradient0 += step_sum[a] * c0[a];
+  corr[0] = keep_if(ok, gradient0 * (zero<V>() - w[0]));
+  for (int k = 0; k < Dim; ++k) {
+    Vec3<V> gradient = step_sum[0] * m[k][0];
+    for (int a = 1; a < Dim; ++a) gradient += step_sum[a] * m[k][a];
+    corr[k + 1] = keep_if(ok, gradient * (zero<V>() - w[k + 1]));
+  }
   return ok;
 }
 

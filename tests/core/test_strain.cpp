@@ -346,6 +346,76 @@ TEST(StrainTetra, SubConstraintsRunInGaussSeidelOrder) {
   }
 }
 
+// The same chain with each normalisation flag on its own, a static vertex, and sub-constraints
+// switched off (stiffness 0) between active ones: the element's result is still the single
+// sub-constraints applied in order to the positions the previous ones moved.
+TEST(StrainTetra, GaussSeidelOrderHoldsWithMixedFlagsStaticVerticesAndSkippedEntries) {
+  Random random(65);
+  const Tet t = random_tet(random);
+  std::array<Vector3r, 4> p = t.rest;
+  for (auto& x : p) x += Real(0.15) * random.vector();
+  const std::array<std::array<Real, 4>, 3> masses = {
+      {{1, 2, Real(0.5), 1}, {0, 2, Real(0.5), 1}, {1, 0, Real(0.5), 0}}};
+  const std::array<Real, 6> k = {Real(0.9), 0, Real(0.7), Real(0.6), 0, Real(0.4)};
+  for (const auto& w : masses) {
+    for (const bool normalize_stretch : {false, true}) {
+      for (const bool normalize_shear : {false, true}) {
+        const Result4 all = solve_tet(p, w, t.inv_rest, Vector3r(k[0], k[1], k[2]),
+                                      Vector3r(k[3], k[4], k[5]), normalize_stretch,
+                                      normalize_shear);
+        ASSERT_TRUE(all.ok);
+        std::array<Vector3r, 4> q = p;
+        for (int s = 0; s < 6; ++s) {
+          if (k[std::size_t(s)] == 0) continue;
+          const auto [stretch, shear] = only(s, k[std::size_t(s)]);
+          const Result4 one =
+              solve_tet(q, w, t.inv_rest, stretch, shear, normalize_stretch, normalize_shear);
+          ASSERT_TRUE(one.ok);
+          for (int i = 0; i < 4; ++i) q[i] += one.corr[i];
+        }
+        for (int i = 0; i < 4; ++i) {
+          EXPECT_TRUE(near_relative(p[i] + all.corr[i], q[i]))
+              << "vertex " << i << ", stretch " << normalize_stretch << ", shear "
+              << normalize_shear;
+          if (w[std::size_t(i)] == 0) EXPECT_EQ(all.corr[i], Vector3r::Zero());
+        }
+      }
+    }
+  }
+}
+
+// Switched-off sub-constraints that would be degenerate (zz and the shears with z, normalised,
+// on a vanished column f_z) leave the active ones (xx, yy, xy) to run as if alone: ok, finite
+// corrections, those of their chain. p0 is static, so f_z = p3 - p0 stays zero through the
+// chain (with M = I only f_z's entries move p3).
+TEST(StrainTetra, SwitchedOffDegenerateSubConstraintsLeaveTheOthers) {
+  Matrix3r m;
+  ASSERT_TRUE(PBD::init_StrainTetraConstraint(Vector3r(0, 0, 0), Vector3r(1, 0, 0),
+                                              Vector3r(0, 1, 0), Vector3r(0, 0, 1), m));
+  const Vector3r stretch(Real(0.9), Real(0.8), 0), shear(Real(0.7), 0, 0);
+  const std::array<Real, 4> w = {0, 1, 2, 1};
+  const Vector3r p0(Real(0.1), Real(-0.2), Real(0.05));
+  const std::array<Vector3r, 4> p = {p0, Vector3r(Real(1.3), Real(0.1), Real(-0.1)),
+                                     Vector3r(Real(0.4), Real(0.8), Real(0.2)), p0};
+  const Result4 all = solve_tet(p, w, m, stretch, shear, true, true);
+  ASSERT_TRUE(all.ok);
+  EXPECT_TRUE(all_finite(all.corr));
+  EXPECT_EQ(all.corr[0], Vector3r::Zero());
+  EXPECT_EQ(all.corr[3], Vector3r::Zero());
+  EXPECT_GT(all.corr[1].norm(), Real(0.1));
+  EXPECT_GT(all.corr[2].norm(), Real(0.01));
+  std::array<Vector3r, 4> q = p;
+  for (const int s : {0, 1, 3}) {
+    const auto [one_stretch, one_shear] = only(s, s < 3 ? stretch[s] : shear[s - 3]);
+    const Result4 one = solve_tet(q, w, m, one_stretch, one_shear, true, true);
+    ASSERT_TRUE(one.ok);
+    for (int i = 0; i < 4; ++i) q[i] += one.corr[i];
+  }
+  for (int i = 0; i < 4; ++i) EXPECT_TRUE(near_relative(p[i] + all.corr[i], q[i])) << i;
+  // Switched on, the vanished column makes the element degenerate.
+  EXPECT_FALSE(solve_tet(p, w, m, Vector3r::Ones(), Vector3r::Ones(), true, true).ok);
+}
+
 TEST(StrainTetra, InvariantsAndConvergence) {
   Random random(63);
   const Tet t = random_tet(random);

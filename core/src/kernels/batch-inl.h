@@ -373,7 +373,9 @@ HWY_INLINE void prefetch_constraint_particles(const ParticleArrays& particles,
 }
 
 /// Gathers the N particles of constraints i .. i+W, slot by slot: gathered keeps what the
-/// scatter needs, position and w are the formula's inputs.
+/// scatter needs, position and w are the formula's inputs. With PrefetchBlocks > 0 it first
+/// asks for the particles of the block that many blocks ahead (prefetch_constraint_particles;
+/// a kernel sets it where it measured a gain).
 template <int N, std::size_t PrefetchBlocks = 0>
 HWY_INLINE void gather_constraint_particles(const ParticleArrays& particles,
                                             const ParticleIndex* const* slot, std::size_t i,

@@ -5,7 +5,8 @@
 // edge matrix M (Dim×Dim) has F = [p1 - p0, ..., p_Dim - p0] · M, whose columns are
 //   f_j = Σ_k M_kj (p_{k+1} - p0).
 // Each entry of S = FᵀF is its own sub-constraint, projected with the PBD rule on the
-// positions the previous ones corrected (Gauss–Seidel inside the element):
+// positions the previous ones corrected (Gauss–Seidel inside the element; project_strain
+// carries F from one to the next instead of the positions, the same in exact arithmetic):
 //   stretch i:  C = |f_i|² - 1,   ∂C/∂f_i = 2 f_i;
 //               or normalised C = |f_i| - 1, ∂C/∂f_i = f_i / |f_i|;
 //   shear i,j:  C = f_i · f_j,    ∂C/∂f_i = f_j, ∂C/∂f_j = f_i;
@@ -136,8 +137,10 @@ inline constexpr double kStrainFormRoundOff = 8 * 1.1920928955078125e-07;
 ///   Δf_j = Σ_i c_i^j Δp_i = -s Σ_a Q_ja D_a,
 /// and the element's corrections are those of the summed steps G_a = Σ_s s D_a:
 ///   Δp_{k+1} = -w_{k+1} Σ_a M_ka G_a,   Δp_0 = -w_0 Σ_a c_0^a G_a.
-/// This is the Gauss–Seidel of the scalar API in exact arithmetic (it rounds differently), at
-/// about half the work per sub-constraint: no edges, columns or particles recomputed in between.
+/// In exact arithmetic this is the Gauss–Seidel over positions, each sub-constraint projected
+/// on the positions the previous ones moved (StrainTetra.SubConstraintsRunInGaussSeidelOrder
+/// checks it against that chain); it rounds differently, at about half the work per
+/// sub-constraint: no edges, columns or particles recomputed in between.
 template <int Dim, int Count, class V>
 HWY_INLINE Mask<V> project_strain(const Vec3<V> (&p)[Dim + 1], const V (&w)[Dim + 1],
                                   const V (&m)[Dim][Dim], const StrainEntry (&entries)[Count],

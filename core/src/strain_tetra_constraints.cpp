@@ -21,10 +21,10 @@ namespace HWY_NAMESPACE {
 /// a 40×40×160 bar's particles (8.6 MB) overflow L2, and the kernel's six sub-constraints are
 /// too long for the out-of-order window to reach the next block's gathers: one block ahead
 /// took it from 28.9 to 36.2 M/s (medians of 5, one thread, Zen 4; two blocks, measured
-/// before project_strain carried F, the same as one). In float the same prefetch cost 10 % (71.6 to 64.2): half the bytes per
-/// particle, twice the lanes to prefetch per block. The batch loop's families and the FEM
-/// tetrahedron were no faster with it on any scene of issue 17's table, and lost up to 20 %
-/// (float FEM bar), in either precision.
+/// before project_strain carried F, the same as one). In float the same prefetch cost 10 %
+/// (71.6 to 64.2): half the bytes per particle, twice the lanes to prefetch per block. The
+/// batch loop's families and the FEM tetrahedron were no faster with it on any scene of
+/// issue 17's table, and lost up to 20 % (float FEM bar), in either precision.
 constexpr std::size_t kPrefetchBlocks = TESSERA_DOUBLE_PRECISION ? 1 : 0;
 
 template <bool kNormalizeStretch, bool kNormalizeShear>

@@ -24,7 +24,7 @@ namespace HWY_NAMESPACE {
 /// before project_strain carried F, the same as one). In float the same prefetch cost 10 %
 /// (71.6 to 64.2): half the bytes per particle, twice the lanes to prefetch per block. The
 /// batch loop's families and the FEM tetrahedron were no faster with it on any scene of
-/// issue 17's table, and lost up to 20 % (float FEM bar), in either precision.
+/// issue 17's table, and lost up to 23 % (the float distance-only cloth).
 constexpr std::size_t kPrefetchBlocks = TESSERA_DOUBLE_PRECISION ? 1 : 0;
 
 template <bool kNormalizeStretch, bool kNormalizeShear>

@@ -131,6 +131,7 @@ template <class Batch>
 void zero_lambda_range(Batch& batch, std::size_t begin, std::size_t end) {
   if (Real* lambda = lambda_of(batch)) std::fill(lambda + begin, lambda + end, Real(0));
 }
+
 template <ConstraintFamily Family>
 void zero_lambdas(ConstraintSets& sets, std::size_t begin, std::size_t end) {
   zero_lambda_range(sets.get<Family>(), begin, end);

@@ -107,8 +107,8 @@ TEST(Contacts, ModelContactsAreResolvedInEveryMode) {
 // A substep's first iteration starts the coloured set's λ at 0 in the kernels
 // (ProjectionSettings::lambda_starts_at_zero, via settings_for, which once dropped it for the
 // contacts: they have λ but no XPBD form). With a phase hook the solver resets λ in a pass of
-// its own instead (mode gs): the same bits. Gravity lifts the particles off their faces after the first
-// substep, so a stale λ would pull them back.
+// its own instead (mode gs): the same bits. Gravity lifts the particles off their faces after
+// the first substep, so a stale λ would pull them back.
 TEST(Contacts, ContactLambdasStartAtZeroEachSubstepAsAfterAReset) {
   const ContactScene scene;
   for (const std::size_t threads : {1u, 2u}) {

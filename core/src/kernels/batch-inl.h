@@ -350,6 +350,18 @@ HWY_INLINE void constraint_slots(const ConstraintParticles<N>& indices,
   for (int k = 0; k < N; ++k) slot[k] = indices.particle[std::size_t(k)].data();
 }
 
+/// Asks the caches for particle `index`: its one line in the interleaved layout, its line of
+/// each of the four arrays in the separate one.
+HWY_INLINE void prefetch_particle(const ParticleArrays& particles, std::size_t index) {
+  const std::size_t at = index * particles.stride;
+  __builtin_prefetch(particles.x + at);
+  if (!particles.interleaved()) {
+    __builtin_prefetch(particles.y + at);
+    __builtin_prefetch(particles.z + at);
+    __builtin_prefetch(particles.inverse_mass + at);
+  }
+}
+
 /// Asks the caches for the N particles of constraints i .. min(i + W, end) ahead of their
 /// gather. A kernel whose formula is long (hundreds of instructions per W constraints) keeps
 /// the out-of-order window from reaching the next block's loads, so each block's gathers
@@ -359,17 +371,9 @@ HWY_INLINE void prefetch_constraint_particles(const ParticleArrays& particles,
                                               const ParticleIndex* const* slot, std::size_t i,
                                               std::size_t end) {
   const std::size_t count = std::min(end - i, hn::Lanes(RealTag()));
-  for (int k = 0; k < N; ++k) {
-    for (std::size_t lane = 0; lane < count; ++lane) {
-      const std::size_t at = std::size_t(slot[k][i + lane]) * particles.stride;
-      __builtin_prefetch(particles.x + at);
-      if (!particles.interleaved()) {
-        __builtin_prefetch(particles.y + at);
-        __builtin_prefetch(particles.z + at);
-        __builtin_prefetch(particles.inverse_mass + at);
-      }
-    }
-  }
+  for (int k = 0; k < N; ++k)
+    for (std::size_t lane = 0; lane < count; ++lane)
+      prefetch_particle(particles, slot[k][i + lane]);
 }
 
 /// Gathers the N particles of constraints i .. i+W, slot by slot: gathered keeps what the

@@ -1,7 +1,9 @@
 // The loop every batched kernel of an N-particle family runs, written once:
 //
 //   for each chunk of W constraints in [begin, end):
-//     gather the N slots' positions and inverse masses      (batch-inl.h)
+//     gather the N slots' positions and inverse masses      (batch-inl.h; for N ≤ 2 the
+//                                                            next chunk's, this one's
+//                                                            having been gathered before)
 //     evaluate the family's formula on the W lanes          (the caller's lambda)
 //     project with PBD stiffness or XPBD compliance          (projection-inl.h)
 //     store λ of the active lanes, scatter movable particles (batch-inl.h)
@@ -55,13 +57,36 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   constraint_slots(indices, slot);
   const bool compliance = settings.semantics == ConstraintSemantics::compliance;
   const auto step = TimeStep<RealLanes>::of(hn::Set(d, settings.dt));
+  // Two-particle families gather the next block's particles before they project this one.
+  // Why: their formula is short, but its chain from the loads through the square root and
+  // the division to the scatter is long, and the out-of-order window reaches the next
+  // block's loads only late in it; issued a block earlier, those loads and their transposes
+  // overlap the chain (docs/performance.md, "The next block's particles gathered first").
+  // It is exact: a range's constraints share no movable particle, so the next block's
+  // particles are not the ones this block writes. The four-particle families measured no
+  // gain (their formulas are long enough to hide the loads, and hold 16 more registers).
+  constexpr bool kGatherAhead = N <= 2;
+  ParticleLanes gathered[N], ahead[N];
+  Vec3<RealLanes> position[N], ahead_position[N];
+  RealLanes w[N], ahead_w[N];
+  if (kGatherAhead && begin < end)
+    gather_constraint_particles(particles, slot, begin, end, ahead, ahead_position, ahead_w);
   for (std::size_t i = begin; i < end; i += lanes) {
     const std::size_t active_count = end - i;
     const LaneMask active = hn::FirstN(d, active_count);
-    ParticleLanes gathered[N];
-    Vec3<RealLanes> position[N];
-    RealLanes w[N];
-    gather_constraint_particles(particles, slot, i, end, gathered, position, w);
+    if constexpr (kGatherAhead) {
+      HWY_UNROLL(16)
+      for (int k = 0; k < N; ++k) {
+        gathered[k] = ahead[k];
+        position[k] = ahead_position[k];
+        w[k] = ahead_w[k];
+      }
+      if (i + lanes < end)
+        gather_constraint_particles(particles, slot, i + lanes, end, ahead, ahead_position,
+                                    ahead_w);
+    } else {
+      gather_constraint_particles(particles, slot, i, end, gathered, position, w);
+    }
     const auto value = evaluate(position, i);
     Vec3<RealLanes> corr[N];
     if (compliance) {

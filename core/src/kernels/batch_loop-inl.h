@@ -63,8 +63,9 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   // block's loads only late in it; issued a block earlier, those loads and their transposes
   // overlap the chain (docs/performance.md, "The next block's particles gathered first").
   // It is exact: a range's constraints share no movable particle, so the next block's
-  // particles are not the ones this block writes. The four-particle families measured no
-  // gain (their formulas are long enough to hide the loads, and hold 16 more registers).
+  // particles are not the ones this block writes. The dihedral measured no gain (the longer
+  // formulas of the families of three and four particles hide the loads, and holding a
+  // block ahead costs them 12 or 16 more registers), so they gather one block at a time.
   constexpr bool kGatherAhead = N <= 2;
   ParticleLanes gathered[N], ahead[N];
   Vec3<RealLanes> position[N], ahead_position[N];

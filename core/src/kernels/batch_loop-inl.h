@@ -1,8 +1,8 @@
 // The loop every batched kernel of an N-particle family runs, written once:
 //
-//   for each chunk of W constraints in [begin, end):
+//   for each block of W constraints in [begin, end):
 //     gather the N slots' positions and inverse masses      (batch-inl.h; for N ≤ 2 the
-//                                                            next chunk's, this one's
+//                                                            next block's, this one's
 //                                                            having been gathered before)
 //     evaluate the family's formula on the W lanes          (the caller's lambda)
 //     project with PBD stiffness or XPBD compliance          (projection-inl.h)
@@ -57,7 +57,8 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   constraint_slots(indices, slot);
   const bool compliance = settings.semantics == ConstraintSemantics::compliance;
   const auto step = TimeStep<RealLanes>::of(hn::Set(d, settings.dt));
-  // Two-particle families gather the next block's particles before they project this one.
+  // Families of one or two particles gather the next block's particles before they project
+  // this one.
   // Why: their formula is short, but its chain from the loads through the square root and
   // the division to the scatter is long, and the out-of-order window reaches the next
   // block's loads only late in it; issued a block earlier, those loads and their transposes

@@ -58,11 +58,11 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   const bool compliance = settings.semantics == ConstraintSemantics::compliance;
   const auto step = TimeStep<RealLanes>::of(hn::Set(d, settings.dt));
   // Families of one or two particles gather the next block's particles before they project
-  // this one.
-  // Why: their formula is short, but its chain from the loads through the square root and
-  // the division to the scatter is long, and the out-of-order window reaches the next
-  // block's loads only late in it; issued a block earlier, those loads and their transposes
-  // overlap the chain (docs/performance.md, "The next block's particles gathered first").
+  // this one. Why: their formula is short, but its chain from the loads through the square
+  // root and the division to the scatter is long, and the out-of-order window reaches the
+  // next block's loads only late in it; issued a block earlier, those loads and their
+  // transposes overlap the chain (docs/performance.md, "The next block's particles gathered
+  // first").
   // It is exact: a range's constraints share no movable particle, so the next block's
   // particles are not the ones this block writes. The dihedral measured no gain (the longer
   // formulas of the families of three and four particles hide the loads, and holding a

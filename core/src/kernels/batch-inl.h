@@ -400,6 +400,15 @@ HWY_INLINE void gather_constraint_particles(const ParticleArrays& particles,
   }
 }
 
+/// The same without the separate position and w views.
+template <int N>
+HWY_INLINE void gather_constraint_particles(const ParticleArrays& particles,
+                                            const ParticleIndex* const* slot, std::size_t i,
+                                            std::size_t end, ParticleLanes (&gathered)[N]) {
+  HWY_UNROLL(16)
+  for (int k = 0; k < N; ++k) gathered[k] = gather_particles(particles, slot[k] + i, end - i);
+}
+
 /// The redirected output of ParticleArrays (corrected_x/y/z) seen as particle arrays, so the
 /// same scatter can write it.
 HWY_INLINE ParticleArrays corrected_output(const ParticleArrays& particles) {

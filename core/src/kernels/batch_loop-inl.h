@@ -62,17 +62,15 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   // root and the division to the scatter is long, and the out-of-order window reaches the
   // next block's loads only late in it; issued a block earlier, those loads and their
   // transposes overlap the chain (docs/performance.md, "The next block's particles gathered
-  // first").
-  // It is exact: a range's constraints share no movable particle, so the next block's
+  // first"). It is exact: a range's constraints share no movable particle, so the next block's
   // particles are not the ones this block writes. The dihedral measured no gain (the longer
   // formulas of the families of three and four particles hide the loads, and holding a
   // block ahead costs them 12 or 16 more registers), so they gather one block at a time.
   constexpr bool kGatherAhead = N <= 2;
   ParticleLanes gathered[N], ahead[N];
-  Vec3<RealLanes> position[N], ahead_position[N];
-  RealLanes w[N], ahead_w[N];
-  if (kGatherAhead && begin < end)
-    gather_constraint_particles(particles, slot, begin, end, ahead, ahead_position, ahead_w);
+  Vec3<RealLanes> position[N];
+  RealLanes w[N];
+  if (kGatherAhead && begin < end) gather_constraint_particles(particles, slot, begin, end, ahead);
   for (std::size_t i = begin; i < end; i += lanes) {
     const std::size_t active_count = end - i;
     const LaneMask active = hn::FirstN(d, active_count);
@@ -80,12 +78,10 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
       HWY_UNROLL(16)
       for (int k = 0; k < N; ++k) {
         gathered[k] = ahead[k];
-        position[k] = ahead_position[k];
-        w[k] = ahead_w[k];
+        position[k] = gathered[k].position;
+        w[k] = gathered[k].inverse_mass;
       }
-      if (i + lanes < end)
-        gather_constraint_particles(particles, slot, i + lanes, end, ahead, ahead_position,
-                                    ahead_w);
+      if (i + lanes < end) gather_constraint_particles(particles, slot, i + lanes, end, ahead);
     } else {
       gather_constraint_particles(particles, slot, i, end, gathered, position, w);
     }

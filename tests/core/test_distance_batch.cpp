@@ -56,18 +56,24 @@ TEST(DistanceBatch, BitwiseReproducibleOnEveryTarget) {
   test::expect_bitwise_reproducible(random_edges, build, project_distance_constraints);
 }
 
+TEST(DistanceBatch, ARangeIsItsConstraintsProjectedOneByOne) {
+  test::expect_range_is_its_constraints_one_by_one(random_edges, build,
+                                                   project_distance_constraints);
+}
+
 TEST(DistanceBatch, StaticParticlesAndEmptyRangesAreNotWritten) {
   test::expect_static_particles_and_empty_ranges_not_written(
       random_edges, build, project_distance_constraints, {ProjectionSettings{}}, false);
 }
 
-// The kernel gathers each block's particles while it projects the block before
-// (batch_loop-inl.h). It must never read the particles of a constraint at or past the range's
-// end, wherever the end falls in a block: another thread may be writing them. Here the
-// constraints past the end name a particle far past the arrays (set after validation; small
-// enough that four times it is still a positive 32-bit index), so a read of one faults (and
-// AddressSanitizer names it); the range's result is the scalar API's, in both particle
-// layouts, for ranges starting at 0 and off a block's start.
+// The kernel gathers each block's particles while it projects the block before, and scatters
+// each block after it projects the block after (batch_loop-inl.h). It must never read or write
+// the particles of a constraint at or past the range's end, wherever the end falls in a block:
+// another thread may be writing them. Here the constraints past the end name a particle far
+// past the arrays (set after validation; small enough that four times it is still a positive
+// 32-bit index), so a read or write of one faults (and AddressSanitizer names it); the range's
+// result is the scalar API's, in both particle layouts, for ranges starting at 0 and off a
+// block's start.
 TEST(DistanceBatch, TheNextBlockIsGatheredOnlyWithinTheRange) {
   constexpr std::size_t kLanes = kMaxLanes;
   constexpr std::size_t kCount = 3 * kLanes + 5;

@@ -145,6 +145,11 @@ TEST(TetherBatch, BitwiseReproducibleOnEveryTarget) {
   test::expect_bitwise_reproducible(random_tethers, build, project_tether_constraints);
 }
 
+TEST(TetherBatch, ARangeIsItsTethersProjectedOneByOne) {
+  test::expect_range_is_its_constraints_one_by_one(random_tethers, build,
+                                                   project_tether_constraints);
+}
+
 TEST(TetherBatch, StaticParticlesAndEmptyRangesAreNotWritten) {
   test::expect_static_particles_and_empty_ranges_not_written(
       random_tethers, build, project_tether_constraints, {ProjectionSettings{}}, true);

@@ -6,7 +6,9 @@
 //                                                            having been gathered before)
 //     evaluate the family's formula on the W lanes          (the caller's lambda)
 //     project with PBD stiffness or XPBD compliance          (projection-inl.h)
-//     store λ of the active lanes, scatter movable particles (batch-inl.h)
+//     store λ of the active lanes, scatter movable particles (batch-inl.h; for N ≤ 2 the
+//                                                            block before's, this one's
+//                                                            held for the next pass)
 //
 // Why: the fixed-arity families with one stiffness (or compliance and λ) per constraint
 // differ only in their formula, rest data and where their stiffness comes from; sharing the
@@ -57,45 +59,84 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   constraint_slots(indices, slot);
   const bool compliance = settings.semantics == ConstraintSemantics::compliance;
   const auto step = TimeStep<RealLanes>::of(hn::Set(d, settings.dt));
-  // Families of one or two particles gather the next block's particles before they project
-  // this one. Why: their formula is short, but its chain from the loads through the square
-  // root and the division to the scatter is long, and the out-of-order window reaches the
-  // next block's loads only late in it; issued a block earlier, those loads and their
-  // transposes overlap the chain (docs/performance.md, "The next block's particles gathered
-  // first"). It is exact: a range's constraints share no movable particle, so the next block's
-  // particles are not the ones this block writes. The dihedral measured no gain (the longer
-  // formulas of the families of three and four particles hide the loads, and holding a
-  // block ahead costs them 12 or 16 more registers), so they gather one block at a time.
-  constexpr bool kGatherAhead = N <= 2;
-  ParticleLanes gathered[N], ahead[N];
-  Vec3<RealLanes> position[N];
-  RealLanes w[N];
-  if (kGatherAhead && begin < end) gather_constraint_particles(particles, slot, begin, end, ahead);
-  for (std::size_t i = begin; i < end; i += lanes) {
-    const std::size_t active_count = end - i;
-    const LaneMask active = hn::FirstN(d, active_count);
-    if constexpr (kGatherAhead) {
-      HWY_UNROLL(16)
-      for (int k = 0; k < N; ++k) {
-        gathered[k] = ahead[k];
-        position[k] = gathered[k].position;
-        w[k] = gathered[k].inverse_mass;
-      }
-      if (i + lanes < end) gather_constraint_particles(particles, slot, i + lanes, end, ahead);
-    } else {
-      gather_constraint_particles(particles, slot, i, end, gathered, position, w);
-    }
+  const auto project_block = [&](std::size_t i, const Vec3<RealLanes> (&position)[N],
+                                 const RealLanes (&w)[N], Vec3<RealLanes> (&corr)[N]) {
     const auto value = evaluate(position, i);
-    Vec3<RealLanes> corr[N];
     if (compliance) {
       RealLanes lambda = settings.lambda_starts_at_zero ? hn::Zero(d)
                                                         : hn::LoadU(d, parameters.lambda + i);
       project_xpbd(value, w, hn::LoadU(d, parameters.compliance + i), step, lambda, corr);
-      store_active(lambda, active_count, parameters.lambda + i);
+      store_active(lambda, end - i, parameters.lambda + i);
     } else {
       project_pbd(value, w, stiffness_of(value, i), corr);
     }
-    scatter_constraint_particles(particles, slot, i, gathered, corr, active);
+  };
+  // Families of one or two particles run the blocks as a pipeline of three:
+  //
+  //   block i + W:  gathered   ─┐
+  //   block i:      projected   ├─ in one pass of the loop, in this order
+  //   block i − W:  scattered  ─┘
+  //
+  // Why: their formula is short, but its chain from the loads through the square root and the
+  // division to the scatter is long. One block at a time, the out-of-order window reaches the
+  // next block's loads only late in that chain, and the scatter waits on the division; issued
+  // a block earlier, the loads and their transposes overlap the chain, and deferred a block,
+  // the scatter overlaps the next block's (docs/performance.md, "The next block's particles
+  // gathered first" and "Each block scattered after the next is projected"). The block held
+  // for the scatter keeps its corrected particles only (4 registers a particle), not its
+  // gathered ones and their corrections (7), which spilled more.
+  // It is exact: a range's constraints share no movable particle, so no block reads a particle
+  // another block of the range writes, in whatever order the three run. The families of three
+  // and four particles measured no gain from the gather ahead (their longer formulas hide the
+  // loads, and holding a block ahead costs them 12 or 16 more registers), so they run one
+  // block at a time.
+  if constexpr (N <= 2) {
+    if (begin >= end) return;
+    ParticleLanes ahead[N], held[N];
+    gather_constraint_particles(particles, slot, begin, end, ahead);
+    // The first block is peeled. Why: with its scatter skipped by a test in the loop instead,
+    // the distance kernel measured 2–6 % slower, and with the loop's body a lambda shared by
+    // both, 35 % slower (the compiler then kept fewer of the lanes in registers).
+    std::size_t held_at = begin;
+    {
+      Vec3<RealLanes> position[N], corr[N];
+      RealLanes w[N];
+      HWY_UNROLL(16)
+      for (int k = 0; k < N; ++k) {
+        position[k] = ahead[k].position;
+        w[k] = ahead[k].inverse_mass;
+      }
+      if (begin + lanes < end)
+        gather_constraint_particles(particles, slot, begin + lanes, end, ahead);
+      project_block(begin, position, w, corr);
+      HWY_UNROLL(16)
+      for (int k = 0; k < N; ++k) held[k] = {position[k] + corr[k], w[k]};
+    }
+    for (std::size_t i = begin + lanes; i < end; i += lanes) {
+      Vec3<RealLanes> position[N], corr[N];
+      RealLanes w[N];
+      HWY_UNROLL(16)
+      for (int k = 0; k < N; ++k) {
+        position[k] = ahead[k].position;
+        w[k] = ahead[k].inverse_mass;
+      }
+      if (i + lanes < end) gather_constraint_particles(particles, slot, i + lanes, end, ahead);
+      project_block(i, position, w, corr);
+      scatter_constraint_particles(particles, slot, held_at, held, hn::FirstN(d, end - held_at));
+      HWY_UNROLL(16)
+      for (int k = 0; k < N; ++k) held[k] = {position[k] + corr[k], w[k]};
+      held_at = i;
+    }
+    scatter_constraint_particles(particles, slot, held_at, held, hn::FirstN(d, end - held_at));
+  } else {
+    for (std::size_t i = begin; i < end; i += lanes) {
+      ParticleLanes gathered[N];
+      Vec3<RealLanes> position[N], corr[N];
+      RealLanes w[N];
+      gather_constraint_particles(particles, slot, i, end, gathered, position, w);
+      project_block(i, position, w, corr);
+      scatter_constraint_particles(particles, slot, i, gathered, corr, hn::FirstN(d, end - i));
+    }
   }
 }
 

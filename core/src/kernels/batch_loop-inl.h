@@ -92,27 +92,14 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   // block at a time.
   if constexpr (N <= 2) {
     if (begin >= end) return;
-    ParticleLanes ahead[N], held[N];
+    ParticleLanes ahead[N], held[N] = {};
     gather_constraint_particles(particles, slot, begin, end, ahead);
-    // The first block is peeled. Why: with its scatter skipped by a test in the loop instead,
-    // the distance kernel measured 2–6 % slower, and with the loop's body a lambda shared by
-    // both, 35 % slower (the compiler then kept fewer of the lanes in registers).
-    std::size_t held_at = begin;
-    {
-      Vec3<RealLanes> position[N], corr[N];
-      RealLanes w[N];
-      HWY_UNROLL(16)
-      for (int k = 0; k < N; ++k) {
-        position[k] = ahead[k].position;
-        w[k] = ahead[k].inverse_mass;
-      }
-      if (begin + lanes < end)
-        gather_constraint_particles(particles, slot, begin + lanes, end, ahead);
-      project_block(begin, position, w, corr);
-      HWY_UNROLL(16)
-      for (int k = 0; k < N; ++k) held[k] = {position[k] + corr[k], w[k]};
-    }
-    for (std::size_t i = begin + lanes; i < end; i += lanes) {
+    // The block held for the scatter; the first pass scatters no lane of it. Why not a test
+    // that skips that scatter: the distance kernel measured 2–6 % slower with one (the
+    // compiler then kept fewer of the lanes in registers), and 35 % slower with the first
+    // block peeled through a lambda shared with the loop.
+    std::size_t held_at = begin, held_count = 0;
+    for (std::size_t i = begin; i < end; i += lanes) {
       Vec3<RealLanes> position[N], corr[N];
       RealLanes w[N];
       HWY_UNROLL(16)
@@ -122,12 +109,13 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
       }
       if (i + lanes < end) gather_constraint_particles(particles, slot, i + lanes, end, ahead);
       project_block(i, position, w, corr);
-      scatter_constraint_particles(particles, slot, held_at, held, hn::FirstN(d, end - held_at));
+      scatter_constraint_particles(particles, slot, held_at, held, hn::FirstN(d, held_count));
       HWY_UNROLL(16)
       for (int k = 0; k < N; ++k) held[k] = {position[k] + corr[k], w[k]};
       held_at = i;
+      held_count = end - i;
     }
-    scatter_constraint_particles(particles, slot, held_at, held, hn::FirstN(d, end - held_at));
+    scatter_constraint_particles(particles, slot, held_at, held, hn::FirstN(d, held_count));
   } else {
     for (std::size_t i = begin; i < end; i += lanes) {
       ParticleLanes gathered[N];

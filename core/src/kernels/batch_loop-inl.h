@@ -8,7 +8,8 @@
 //     project with PBD stiffness or XPBD compliance          (projection-inl.h)
 //     store λ of the active lanes, scatter movable particles (batch-inl.h; for N ≤ 2 the
 //                                                            block before's, this one's
-//                                                            held for the next pass)
+//                                                            held until the next block
+//                                                            is projected)
 //
 // Why: the fixed-arity families with one stiffness (or compliance and λ) per constraint
 // differ only in their formula, rest data and where their stiffness comes from; sharing the
@@ -79,14 +80,17 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   //
   // Why: their formula is short, but its chain from the loads through the square root and the
   // division to the scatter is long. One block at a time, the out-of-order window reaches the
-  // next block's loads only late in that chain, and the scatter waits on the division; issued
-  // a block earlier, the loads and their transposes overlap the chain, and deferred a block,
-  // the scatter overlaps the next block's (docs/performance.md, "The next block's particles
-  // gathered first" and "Each block scattered after the next is projected"). The block held
-  // for the scatter keeps its corrected particles only (4 registers a particle), not its
-  // gathered ones and their corrections (7), which spilled more.
+  // next block's loads only late in that chain, and the scatter's stores sit behind the
+  // division; issued a block earlier, the loads and their transposes overlap the chain, and
+  // deferred a block, the scatter overlaps the next block's formula (docs/performance.md,
+  // "The next block's particles gathered first" and "Each block scattered after the next is
+  // projected": 1.14× on the distance-only cloth, though the samples waiting on the division
+  // did not shrink). The block held for the scatter keeps its corrected particles only (4
+  // registers a particle), not its gathered ones and their corrections (7), which spilled more.
   // It is exact: a range's constraints share no movable particle, so no block reads a particle
-  // another block of the range writes, in whatever order the three run. The families of three
+  // another block of the range writes, in whatever order the three run (a Jacobi set's range
+  // may share particles, but its kernel writes the redirected output and never reads it, see
+  // ParticleArrays). The families of three
   // and four particles measured no gain from the gather ahead (their longer formulas hide the
   // loads, and holding a block ahead costs them 12 or 16 more registers), so they run one
   // block at a time.
@@ -95,9 +99,10 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
     ParticleLanes ahead[N], held[N] = {};
     gather_constraint_particles(particles, slot, begin, end, ahead);
     // The block held for the scatter; the first pass scatters no lane of it. Why not a test
-    // that skips that scatter: the distance kernel measured 2–6 % slower with one (the
-    // compiler then kept fewer of the lanes in registers), and 35 % slower with the first
-    // block peeled through a lambda shared with the loop.
+    // that skips that scatter: the distance kernel measured 2–6 % slower with one (against
+    // the first block peeled by hand, which measured the same as this but repeated the loop's
+    // body), and 36 % slower with the first block peeled through a lambda shared with the
+    // loop (the compiler then kept the lanes in memory).
     std::size_t held_at = begin, held_count = 0;
     for (std::size_t i = begin; i < end; i += lanes) {
       Vec3<RealLanes> position[N], corr[N];

@@ -5,7 +5,8 @@
 // All arrays are padded (padded_size) so a kernel can load W consecutive constraints from any
 // position. A batched kernel projects a range [begin, end) of one family; the constraints of
 // one range must not share a movable particle (a colour of the colouring stage guarantees
-// it), because W of them are gathered, corrected and scattered at once.
+// it), because W of them are gathered, corrected and scattered at once, and the kernels of
+// two-particle families overlap neighbouring blocks (kernels/batch_loop-inl.h).
 #pragma once
 
 #include <array>

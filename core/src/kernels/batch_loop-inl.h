@@ -90,10 +90,9 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
   // It is exact: a range's constraints share no movable particle, so no block reads a particle
   // another block of the range writes, in whatever order the three run (a Jacobi set's range
   // may share particles, but its kernel writes the redirected output and never reads it, see
-  // ParticleArrays). The families of three
-  // and four particles measured no gain from the gather ahead (their longer formulas hide the
-  // loads, and holding a block ahead costs them 12 or 16 more registers), so they run one
-  // block at a time.
+  // ParticleArrays). The families of three and four particles run one block at a time: they
+  // measured no gain from the gather ahead and a loss from the deferred scatter (their longer
+  // formulas hide the loads, and a block held costs them 12 or 16 more registers).
   if constexpr (N <= 2) {
     if (begin >= end) return;
     ParticleLanes ahead[N], held[N] = {};

@@ -94,16 +94,8 @@ TEST(DistanceBatch, TheNextBlockIsGatheredOnlyWithinTheRange) {
           std::vector<Real> expected_lambda(kCount, Real(0));
           project_scalar(set, constraints, begin, end, settings, expected, expected_lambda);
           ParticleState state(set.positions, set.inverse_masses);
-          if (interleaved) {
-            AlignedVector<Real> xyzw(4 * state.size());
-            interleave_particles(state, xyzw.data(), 0, state.size());
-            project_distance_constraints(ParticleArrays::of_interleaved(xyzw.data(), state.size()),
-                                         constraints, begin, end, settings);
-            deinterleave_positions(xyzw.data(), state, 0, state.size());
-          } else {
-            project_distance_constraints(ParticleArrays::of(state), constraints, begin, end,
-                                         settings);
-          }
+          test::project_in_layout(project_distance_constraints, state, constraints, begin, end,
+                                  settings, interleaved);
           EXPECT_TRUE(test::positions_match(state, expected, 10)) << "interleaved " << interleaved;
         }
       }

@@ -115,7 +115,7 @@ HWY_INLINE void project_constraint_lanes(ParticleArrays particles,
       project_block(i, position, w, corr);
       scatter_constraint_particles(particles, slot, held_at, held, hn::FirstN(d, held_count));
       HWY_UNROLL(16)
-      for (int k = 0; k < N; ++k) held[k] = {position[k] + corr[k], w[k]};
+      for (int k = 0; k < N; ++k) held[k] = corrected_particles({position[k], w[k]}, corr[k]);
       held_at = i;
       held_count = end - i;
     }

@@ -7,6 +7,8 @@
 
 #include <tessera/coloring/colouring.hpp>
 #include <tessera/coloring/colouring_statistics.hpp>
+#include <tessera/coloring/colouring_strategy.hpp>
+#include <tessera/coloring/locality.hpp>
 #include <tessera/core/error.hpp>
 
 #include "test_meshes.hpp"
@@ -58,6 +60,30 @@ TEST(Validate, FindsTwoConstraintsOfOneColourSharingAMovableParticle) {
   EXPECT_NE(check.problem.find("constraint group 'distance', constraint 1"), std::string::npos);
 
   EXPECT_FALSE(validate(graph, Colouring::from_colours({0, 1})).valid);  // wrong size
+}
+
+TEST(Validate, FindsAClashDeepInALongColour) {
+  // validate() reads ahead of the constraint it checks; a clash far into a colour of
+  // thousands, in the particle order improve_locality gives it, is still found and named.
+  const ConstraintGraph graph = test::cloth_graph(60, 60, true);
+  const Colouring plain = ColouringRegistry::with_builtin_strategies().get("greedy").colour(graph, {});
+  const Colouring local = improve_locality(graph, plain);
+  ASSERT_TRUE(validate(graph, local).valid);
+  ASSERT_GT(local.colour_size(0), 1000u);
+  // A constraint two thirds into colour 0, and one of another colour sharing a particle.
+  const ConstraintIndex deep = local.constraints_of(0)[local.colour_size(0) * 2 / 3];
+  const ParticleIndex shared = graph.particles_of(deep)[0];
+  ConstraintIndex other = deep;
+  for (ConstraintIndex c : graph.constraints_of(shared))
+    if (local.colour_of(c) != 0) other = c;
+  ASSERT_NE(other, deep);
+  std::vector<Colour> clash(local.colours().begin(), local.colours().end());
+  clash[other] = 0;
+  const Colouring broken = Colouring::from_colours(clash, local.constraints_by_colour());
+  const ColouringValidation check = validate(graph, broken);
+  EXPECT_FALSE(check.valid);
+  EXPECT_NE(check.problem.find("colour 0: "), std::string::npos) << check.problem;
+  EXPECT_NE(check.problem.find("share movable particle"), std::string::npos) << check.problem;
 }
 
 TEST(Validate, SharingAStaticParticleIsNoConflict) {

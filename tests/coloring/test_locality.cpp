@@ -74,6 +74,68 @@ TEST(ReverseCuthillMcKee, KeepsNeighboursCloseOnAScrambledCloth) {
   EXPECT_LT(after, 3 * 40u);
 }
 
+/// Reverse Cuthill–McKee as locality.hpp states it, written the plain way (whole-graph
+/// neighbour sets, a comparison sort of the starts): the order the library's must equal.
+std::vector<ParticleIndex> textbook_rcm(const ConstraintGraph& graph) {
+  const std::size_t n = graph.particle_count();
+  const auto by_degree_then_index = [&](ParticleIndex a, ParticleIndex b) {
+    return std::pair(graph.particle_degree(a), a) < std::pair(graph.particle_degree(b), b);
+  };
+  std::vector<ParticleIndex> starts;
+  for (ParticleIndex p = 0; p < n; ++p)
+    if (graph.is_movable(p) && graph.particle_degree(p) > 0) starts.push_back(p);
+  std::sort(starts.begin(), starts.end(), by_degree_then_index);
+  std::vector<bool> placed(n, false);
+  std::vector<ParticleIndex> order;
+  for (ParticleIndex start : starts) {
+    if (placed[start]) continue;
+    placed[start] = true;
+    const std::size_t first = order.size();
+    order.push_back(start);
+    for (std::size_t head = first; head < order.size(); ++head) {
+      std::vector<ParticleIndex> next;
+      for (ConstraintIndex c : graph.constraints_of(order[head]))
+        for (ParticleIndex q : graph.particles_of(c))
+          if (!placed[q] && std::find(next.begin(), next.end(), q) == next.end()) next.push_back(q);
+      std::sort(next.begin(), next.end(), by_degree_then_index);
+      for (ParticleIndex q : next) placed[q] = true;
+      order.insert(order.end(), next.begin(), next.end());
+    }
+  }
+  std::reverse(order.begin(), order.end());
+  for (ParticleIndex p = 0; p < n; ++p)
+    if (!placed[p]) order.push_back(p);
+  return order;
+}
+
+TEST(ReverseCuthillMcKee, IsTheTextbookOrder) {
+  // A scrambled cloth (one component, many equal degrees: the index breaks the ties), a
+  // pinned cloth (static particles), and three components of different sizes beside a
+  // particle no constraint touches: the walk's prefetches and its counting sort of the starts
+  // must not change a place.
+  std::vector<ParticleIndex> edges, bending;
+  const ConstraintGraph scrambled = scrambled_cloth(40, edges, bending);
+  EXPECT_EQ(reverse_cuthill_mckee_order(scrambled), textbook_rcm(scrambled));
+  const ConstraintGraph pinned = test::cloth_graph(30, 20, true, true);
+  EXPECT_EQ(reverse_cuthill_mckee_order(pinned), textbook_rcm(pinned));
+
+  const io::ClothGrid small = io::make_cloth_grid(7, 5), large = io::make_cloth_grid(12, 9);
+  std::vector<ParticleIndex> pieces;
+  const auto add = [&](const std::vector<ParticleIndex>& indices, ParticleIndex offset) {
+    for (ParticleIndex p : indices) pieces.push_back(p + offset);
+  };
+  add(large.edge_indices, 0);  // particles 0 .. 107
+  add(small.edge_indices, 200);  // 200 .. 234; 108 .. 199 and 235 are touched by nothing
+  add(small.edge_indices, 236);  // 236 .. 270
+  std::vector<Real> inverse_masses(271, Real(1));
+  inverse_masses[3] = 0;
+  const std::vector<ConstraintGroup> groups = {ConstraintGroup::fixed_arity("distance", 2, pieces)};
+  const ConstraintGraph split(inverse_masses, groups);
+  const std::vector<ParticleIndex> order = reverse_cuthill_mckee_order(split);
+  EXPECT_EQ(order, textbook_rcm(split));
+  EXPECT_TRUE(is_permutation_of_particles(order, 271));
+}
+
 TEST(ImproveLocality, KeepsColoursAndSortsEachColourBySmallestNewParticle) {
   std::vector<ParticleIndex> edges, bending;
   const ConstraintGraph graph = scrambled_cloth(40, edges, bending);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <queue>
 #include <tuple>
 #include <string>
@@ -84,11 +85,34 @@ TetherConstraints make_long_range_attachments(std::span<const Vector3r> rest_pos
     ParticleIndex attachment;
     double distance;
   };
+  constexpr ParticleIndex kNoParticle = std::numeric_limits<ParticleIndex>::max();
   std::vector<Settled> settled(n * wanted);
   std::vector<std::uint32_t> settled_count(n, 0);
   const auto has = [&](ParticleIndex p, ParticleIndex a) {
     for (std::uint32_t k = 0; k < settled_count[p]; ++k)
       if (settled[p * wanted + k].attachment == a) return true;
+    return false;
+  };
+  // Per particle, `wanted` slots remembering the shortest length already queued for an
+  // attachment. An entry no shorter than a queued one of the same (attachment, particle)
+  // would leave the queue after it and be skipped, so it is not queued at all: on a cloth
+  // that is most of the entries (each particle is reached from each settled neighbour). The
+  // slots only ever skip such entries, so the result is the same whatever they forget.
+  std::vector<Settled> queued(n * wanted, {kNoParticle, 0.0});
+  const auto queued_no_longer = [&](ParticleIndex q, ParticleIndex a, double d) {
+    Settled* slots = &queued[q * wanted];
+    Settled* victim = slots;  // the first free slot, else the longest
+    for (std::size_t k = 0; k < wanted; ++k) {
+      if (slots[k].attachment == a) {
+        if (slots[k].distance <= d) return true;
+        slots[k].distance = d;
+        return false;
+      }
+      if (victim->attachment != kNoParticle &&
+          (slots[k].attachment == kNoParticle || slots[k].distance > victim->distance))
+        victim = &slots[k];
+    }
+    if (victim->attachment == kNoParticle || d < victim->distance) *victim = {a, d};
     return false;
   };
   using Entry = std::tuple<double, ParticleIndex, ParticleIndex>;  // length, attachment, particle
@@ -104,7 +128,9 @@ TetherConstraints make_long_range_attachments(std::span<const Vector3r> rest_pos
     for (std::uint32_t k = graph.offsets[p]; k < graph.offsets[p + 1]; ++k) {
       const ParticleIndex q = graph.neighbours[k];
       if (!(inverse_masses[q] > 0) || settled_count[q] == wanted || has(q, a)) continue;
-      queue.push({d + (rest_positions[p] - rest_positions[q]).cast<double>().norm(), a, q});
+      const double length = d + (rest_positions[p] - rest_positions[q]).cast<double>().norm();
+      if (queued_no_longer(q, a, length)) continue;
+      queue.push({length, a, q});
     }
   }
 

@@ -275,22 +275,25 @@ TEST(LongRangeAttachments, SeveralAttachmentsNearestFirstHoldATautChainStraight)
             10u);
 }
 
-TEST(LongRangeAttachments, SeveralAttachmentsReachEachAlongItsOwnShortestPath) {
-  // A 4 × 4 grid with three fixed corners: every particle's k-th attachment and reach equal
-  // a brute-force shortest path from each attachment, sorted by (length, number).
-  constexpr int kSide = 4;
+/// A side × side grid (rows 1.3 apart, columns spaced unevenly so that no two paths tie)
+/// with structural and shear edges, fixed at `fixed`: every particle's k-th attachment and
+/// reach, for k = 1 .. max_k, must equal a brute-force shortest path from each attachment,
+/// sorted by (length, number).
+void expect_attachments_are_the_shortest_paths(int side, const std::vector<std::size_t>& fixed,
+                                               std::size_t max_k) {
   std::vector<Vector3r> positions;
-  for (int r = 0; r < kSide; ++r)
-    for (int c = 0; c < kSide; ++c) positions.emplace_back(Real(c), Real(r) * Real(1.3), 0);
+  for (int r = 0; r < side; ++r)
+    for (int c = 0; c < side; ++c)
+      positions.emplace_back(Real(c) + Real(0.01) * Real(c * c), Real(r) * Real(1.3), 0);
   std::vector<Real> inverse_masses(positions.size(), 1);
-  inverse_masses[0] = inverse_masses[kSide - 1] = inverse_masses[kSide * kSide - 1] = 0;
+  for (const std::size_t a : fixed) inverse_masses[a] = 0;
   std::vector<ParticleIndex> edges;
-  for (int r = 0; r < kSide; ++r)
-    for (int c = 0; c < kSide; ++c) {
-      const auto p = ParticleIndex(r * kSide + c);
-      if (c + 1 < kSide) edges.insert(edges.end(), {p, ParticleIndex(p + 1)});
-      if (r + 1 < kSide) edges.insert(edges.end(), {p, ParticleIndex(p + kSide)});
-      if (c + 1 < kSide && r + 1 < kSide) edges.insert(edges.end(), {p, ParticleIndex(p + kSide + 1)});
+  for (int r = 0; r < side; ++r)
+    for (int c = 0; c < side; ++c) {
+      const auto p = ParticleIndex(r * side + c);
+      if (c + 1 < side) edges.insert(edges.end(), {p, ParticleIndex(p + 1)});
+      if (r + 1 < side) edges.insert(edges.end(), {p, ParticleIndex(p + side)});
+      if (c + 1 < side && r + 1 < side) edges.insert(edges.end(), {p, ParticleIndex(p + side + 1)});
     }
   // Bellman–Ford from each attachment over movable particles only (a path ends at an attachment).
   const std::size_t n = positions.size();
@@ -299,18 +302,19 @@ TEST(LongRangeAttachments, SeveralAttachmentsReachEachAlongItsOwnShortestPath) {
     d[a] = 0;
     for (std::size_t round = 0; round < n; ++round)
       for (std::size_t e = 0; e < edges.size(); e += 2)
-        for (int side = 0; side < 2; ++side) {
-          const std::size_t p = edges[e + side], q = edges[e + 1 - side];
+        for (int end = 0; end < 2; ++end) {
+          const std::size_t p = edges[e + end], q = edges[e + 1 - end];
           if (p != a && inverse_masses[p] == 0) continue;
           if (inverse_masses[q] == 0) continue;
           d[q] = std::min(d[q], d[p] + (positions[p] - positions[q]).cast<double>().norm());
         }
     return d;
   };
-  const std::vector<std::size_t> attachments = {0, kSide - 1, kSide * kSide - 1};
+  std::vector<std::size_t> attachments = fixed;
+  std::sort(attachments.begin(), attachments.end());
   std::vector<std::vector<double>> from;
   for (const std::size_t a : attachments) from.push_back(shortest_from(a));
-  for (std::size_t k = 1; k <= 3; ++k) {
+  for (std::size_t k = 1; k <= max_k; ++k) {
     const TetherConstraints tethers =
         make_long_range_attachments(positions, inverse_masses, edges, {.attachments = k});
     std::size_t t = 0;
@@ -320,7 +324,7 @@ TEST(LongRangeAttachments, SeveralAttachmentsReachEachAlongItsOwnShortestPath) {
       for (std::size_t a = 0; a < attachments.size(); ++a)
         expected.emplace_back(from[a][p], attachments[a]);
       std::sort(expected.begin(), expected.end());
-      for (std::size_t j = 0; j < k; ++j, ++t) {
+      for (std::size_t j = 0; j < std::min(k, attachments.size()); ++j, ++t) {
         ASSERT_LT(t, tethers.size());
         EXPECT_EQ(tethers.particles.particle[0][t], p);
         EXPECT_EQ(tethers.particles.particle[1][t], expected[j].second) << "particle " << p << ", k " << k;
@@ -329,6 +333,21 @@ TEST(LongRangeAttachments, SeveralAttachmentsReachEachAlongItsOwnShortestPath) {
     }
     EXPECT_EQ(t, tethers.size());
   }
+}
+
+TEST(LongRangeAttachments, SeveralAttachmentsReachEachAlongItsOwnShortestPath) {
+  // Three fixed corners of a 4 × 4 grid.
+  expect_attachments_are_the_shortest_paths(4, {0, 3, 15}, 3);
+}
+
+TEST(LongRangeAttachments, ManyAttachmentsFewKeptEachStillTheNearest) {
+  // A 9 × 9 grid fixed along its top row and at two inner points: eleven attachments, of which
+  // each particle keeps one, two or three. The search reaches a particle from many
+  // attachments and remembers only as many queued lengths as it keeps; what it forgets must
+  // not change which it keeps.
+  std::vector<std::size_t> fixed = {20, 58};
+  for (std::size_t c = 0; c < 9; ++c) fixed.push_back(72 + c);
+  expect_attachments_are_the_shortest_paths(9, fixed, 3);
 }
 
 TEST(LongRangeAttachments, NothingWithoutAttachmentsOrForUnconnectedParticles) {

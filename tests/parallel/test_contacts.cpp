@@ -39,7 +39,7 @@ struct ContactScene {
     for (std::size_t c = 0; c < kContacts; ++c) {
       const Real y = Real(2 * c);
       const ParticleIndex first = ParticleIndex(positions.size());
-      for (const Vector3r corner : {Vector3r(0, 0, 0), Vector3r(1, 0, 0), Vector3r(0, 1, 0),
+      for (const Vector3r& corner : {Vector3r(0, 0, 0), Vector3r(1, 0, 0), Vector3r(0, 1, 0),
                                     Vector3r(0, 0, -1)})
         positions.push_back(corner + Vector3r(0, y, 0));
       positions.emplace_back(Real(0.2), y + Real(0.2), -kDepth);

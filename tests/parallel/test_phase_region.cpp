@@ -256,7 +256,7 @@ TEST(PhaseRegion, SubstepsInOneRegionGiveTheBitsOfOneByOne) {
     for (const ParticleLayout layout : {ParticleLayout::interleaved, ParticleLayout::separate}) {
       std::vector<std::vector<Vector3r>> positions, velocities;
       std::vector<std::uint64_t> in_region;
-      for (const auto [threads, regions] :
+      for (const auto& [threads, regions] :
            {std::pair{std::size_t(1), true}, std::pair{std::size_t(2), false},
             std::pair{std::size_t(2), true}, std::pair{std::size_t(3), true}}) {
         SolverSettings settings;

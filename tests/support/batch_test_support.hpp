@@ -219,8 +219,11 @@ void expect_lambda_starting_at_zero_reads_no_lambda(const ParticleState& state,
                         reset.lambda.size() * sizeof(Real)),
             0)
       << "λ differ (range [" << begin << ", " << end << "))";
-  for (std::size_t c = 0; c < started.lambda.size(); ++c)
-    if (c < begin || c >= end) EXPECT_EQ(started.lambda[c], Real(0.75)) << "λ " << c << " changed";
+  for (std::size_t c = 0; c < started.lambda.size(); ++c) {
+    if (c < begin || c >= end) {
+      EXPECT_EQ(started.lambda[c], Real(0.75)) << "λ " << c << " changed";
+    }
+  }
 }
 
 /// Batch against the scalar API for a family with both semantics (PBD stiffness and XPBD

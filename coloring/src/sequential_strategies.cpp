@@ -234,10 +234,46 @@ inline void sort_small(ParticleIndex* v, std::size_t n) {
   }
 }
 
-/// Shape classes: distinct shape hashes with their size and arity, found through an
-/// open-addressing table (the shape is already a hash: its low bits pick the slot). Class ids
-/// are in order of first appearance; nothing downstream depends on them (ranks sort classes
-/// by arity, size and shape).
+/// A constraint's shape: its particle count n and the offsets of its sorted particles from the
+/// first. Up to four particles whose offsets are below 2^20 (every generated mesh, and most
+/// read ones after a locality order) are packed exactly into a key with the top bit set;
+/// anything else is keyed by the hash of the shape. Hashing every constraint cost half the
+/// stencil order's time; a class's hash (by which classes are ranked) is now taken once.
+constexpr unsigned kOffsetBits = 20;
+constexpr std::uint64_t kPackedShape = std::uint64_t(1) << 63;
+
+std::uint64_t shape_hash(std::size_t n, const ParticleIndex* sorted) {
+  std::uint64_t h = mix_hash(0x5EED, n);
+  for (std::size_t i = 1; i < n; ++i) h = mix_hash(h, sorted[i] - sorted[0]);
+  return h;
+}
+
+std::uint64_t shape_key(std::size_t n, const ParticleIndex* sorted) {
+  if (n > 4) return shape_hash(n, sorted);
+  std::uint64_t key = kPackedShape | (std::uint64_t(n) << 60);
+  for (std::size_t i = 1; i < n; ++i) {
+    const std::uint64_t offset = sorted[i] - sorted[0];
+    if (offset >> kOffsetBits) return shape_hash(n, sorted);
+    key |= offset << (kOffsetBits * (i - 1));
+  }
+  return key;
+}
+
+/// The hash of the shape behind a key (shape_hash's value, for either kind of key). A hash
+/// that happens to have the packed bit set would be taken for a packed key here and in the
+/// class table: a 2^-64 chance per class, as for two shapes of one hash before.
+std::uint64_t hash_of_shape_key(std::uint64_t key) {
+  if (!(key & kPackedShape)) return key;
+  const std::size_t n = (key >> 60) & 7;
+  ParticleIndex offsets[4] = {0, 0, 0, 0};
+  for (std::size_t i = 1; i < n; ++i)
+    offsets[i] = ParticleIndex((key >> (kOffsetBits * (i - 1))) & ((1u << kOffsetBits) - 1));
+  return shape_hash(n, offsets);
+}
+
+/// Shape classes: distinct shape keys with their size and arity, found through an
+/// open-addressing table. Class ids are in order of first appearance; nothing downstream
+/// depends on them (ranks sort classes by arity, size and the shape's hash).
 class ShapeClasses {
  public:
   struct Class {
@@ -249,7 +285,7 @@ class ShapeClasses {
 
   std::uint32_t add(std::uint64_t shape, std::uint32_t arity) {
     std::size_t mask = slots_.size() - 1;
-    for (std::size_t s = shape & mask;; s = (s + 1) & mask) {
+    for (std::size_t s = slot_of(shape) & mask;; s = (s + 1) & mask) {
       const std::uint32_t k = slots_[s];
       if (k == kEmpty) {
         const auto id = static_cast<std::uint32_t>(classes_.size());
@@ -268,11 +304,15 @@ class ShapeClasses {
 
  private:
   static constexpr std::uint32_t kEmpty = ~std::uint32_t(0);
+  /// Spreads a packed key's offsets (small numbers in the low bits) over the slots.
+  static std::size_t slot_of(std::uint64_t shape) {
+    return std::size_t((shape * 0x9E3779B97F4A7C15ull) >> 32);
+  }
   void grow() {
     std::vector<std::uint32_t> wider(2 * slots_.size(), kEmpty);
     const std::size_t mask = wider.size() - 1;
     for (std::uint32_t k = 0; k < classes_.size(); ++k) {
-      std::size_t s = classes_[k].shape & mask;
+      std::size_t s = slot_of(classes_[k].shape) & mask;
       while (wider[s] != kEmpty) s = (s + 1) & mask;
       wider[s] = k;
     }
@@ -313,7 +353,7 @@ void sort_by_anchor(std::span<std::uint64_t> keys) {
 
 /// See colour_masks.hpp. Steps, all linear:
 ///  1. per constraint (in parallel), the sorted movable particles p0 < p1 < ...; its anchor is
-///     p0 and its shape a hash of (count, p1 − p0, p2 − p0, ...);
+///     p0 and its shape (count, p1 − p0, p2 − p0, ...), packed or hashed (shape_key);
 ///  2. shapes counted into classes (a hash table); a class holding fewer than kSmallestClass
 ///     constraints is not a pattern (irregular meshes have almost only those) and joins the
 ///     catch-all class of its arity, so irregular input degrades to "by smallest particle";
@@ -345,9 +385,7 @@ LargeBuffer<ConstraintIndex> stencil_order(const ConstraintGraph& graph) {
       }
       std::copy(incidences + offsets[c], incidences + offsets[c + 1], sorted);
       sort_small(sorted, n);
-      std::uint64_t h = mix_hash(0x5EED, n);
-      for (std::size_t i = 1; i < n; ++i) h = mix_hash(h, sorted[i] - sorted[0]);
-      shape[c] = h;
+      shape[c] = shape_key(n, sorted);
       anchor[c] = n > 0 ? sorted[0] : 0;
     }
   });
@@ -370,6 +408,7 @@ LargeBuffer<ConstraintIndex> stencil_order(const ConstraintGraph& graph) {
     }
   }
   std::vector<ShapeClasses::Class>& classes = table.classes();
+  for (ShapeClasses::Class& k : classes) k.shape = hash_of_shape_key(k.shape);  // for ranking
 
   // 3. Rank: small classes of one arity share a catch-all rank placed after that arity's
   // patterns. Catch-alls are modelled as a class of size 0 per arity.

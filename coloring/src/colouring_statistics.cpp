@@ -1,16 +1,72 @@
-// Statistics and validation. validate() stamps each movable particle with the colour that
-// last used it while walking the colours one after another, so a second use within one colour
-// is seen in O(1): one pass over the incidences.
+// Statistics and validation.
+//
+// validate() runs two passes, each in parallel over fixed chunks, and reports the first
+// problem in a fixed order, so its answer does not depend on the thread count:
+//
+//   lists      chunks of the flat colour lists: each entry in range, in the colour colour_of
+//              names, and listed once (an atomic flag per constraint; a second setter saw it)
+//   particles  chunks of particles: no two of a movable particle's constraints (its incidence
+//              list) share a colour
+//
+// The particle pass reads each particle's constraints in id order, so colour_of is read in a
+// few forward streams; walking the colours instead read it, the particle lists and a
+// per-particle stamp in no order at all (0.3 s of the 1024² cloth's start-up).
 #include <tessera/coloring/colouring_statistics.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <limits>
+#include <memory>
 #include <span>
 #include <sstream>
 #include <string>
 #include <utility>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 namespace tessera {
+namespace {
+
+constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+/// Entries (lists) or particles per chunk: fixed, so the chunks are the same on any machine.
+constexpr std::size_t kValidateChunk = std::size_t(1) << 14;
+
+/// The first problem of each kind a pass found: a position in the flat lists, a constraint
+/// or a particle; kNone when there was none. Combined by taking the smaller of each.
+struct Findings {
+  std::size_t out_of_range = kNone;  // position in the lists
+  std::size_t wrong_colour = kNone;  // position in the lists
+  std::size_t listed_twice = kNone;  // constraint
+  std::size_t shared = kNone;        // particle
+  static Findings smaller(Findings a, const Findings& b) {
+    a.out_of_range = std::min(a.out_of_range, b.out_of_range);
+    a.wrong_colour = std::min(a.wrong_colour, b.wrong_colour);
+    a.listed_twice = std::min(a.listed_twice, b.listed_twice);
+    a.shared = std::min(a.shared, b.shared);
+    return a;
+  }
+};
+
+template <class Body>
+Findings reduce_chunks(std::size_t count, Body&& body) {
+  const std::size_t chunks = (count + kValidateChunk - 1) / kValidateChunk;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, chunks, 1), Findings{},
+      [&](const tbb::blocked_range<std::size_t>& r, Findings found) {
+        for (std::size_t chunk = r.begin(); chunk != r.end(); ++chunk)
+          body(chunk * kValidateChunk, std::min(count, (chunk + 1) * kValidateChunk), found);
+        return found;
+      },
+      Findings::smaller);
+}
+
+/// The colour whose list holds flat position i.
+Colour colour_at(std::span<const std::uint32_t> offsets, std::size_t i) {
+  return Colour(std::upper_bound(offsets.begin(), offsets.end(), i) - offsets.begin() - 1);
+}
+
+}  // namespace
 
 ColouringValidation validate(const ConstraintGraph& graph, const Colouring& colouring) {
   auto fail = [](std::string problem) { return ColouringValidation{false, std::move(problem)}; };
@@ -25,63 +81,84 @@ ColouringValidation validate(const ConstraintGraph& graph, const Colouring& colo
   if (colouring.renumbers_particles() && colouring.particle_new_to_old().size() != graph.particle_count())
     return fail("particle permutation has " + std::to_string(colouring.particle_new_to_old().size()) +
                 " entries, the graph " + std::to_string(graph.particle_count()) + " particles");
-
-  std::vector<std::uint8_t> listed(count, 0);
-  constexpr std::uint32_t kUnused = std::numeric_limits<std::uint32_t>::max();
-  // Per particle: the last constraint that used it, and that constraint's colour (side by
-  // side: one cache line per particle visited).
-  struct LastUse {
-    std::uint32_t constraint = kUnused;
-    Colour colour = 0;
-  };
-  std::vector<LastUse> last_use(graph.particle_count());
-  const std::span<const std::uint32_t> member_offsets = graph.constraint_offsets();
-  const std::span<const ParticleIndex> members = graph.constraint_particles();
-  const std::span<const Colour> colour_of = colouring.colours();
-  // A colour lists its constraints in particle order (improve_locality), so their ids, and
-  // with them listed[], colour_of[] and the particle lists, are read in no order: 0.3 s of the
-  // 1024² cloth's start-up, waiting on memory. The ids ahead are known, so their entries are
-  // prefetched: the flat arrays and the list's offset kAhead places ahead, the list itself
-  // half as far, and its particles' last use a quarter as far.
-  constexpr std::size_t kAhead = 32;
-  for (Colour k = 0; k < colouring.colour_count(); ++k) {
+  for (Colour k = 0; k < colouring.colour_count(); ++k)
     if (colouring.colour_size(k) == 0) return fail("colour " + std::to_string(k) + " is empty");
-    const std::span<const ConstraintIndex> listed_in_k = colouring.constraints_of(k);
-    for (std::size_t i = 0; i < listed_in_k.size(); ++i) {
-      if (i + kAhead < listed_in_k.size()) {
-        const ConstraintIndex ahead = listed_in_k[i + kAhead];
-        if (ahead < count) {
-          __builtin_prefetch(&member_offsets[ahead]);
-          __builtin_prefetch(&listed[ahead]);
-          __builtin_prefetch(&colour_of[ahead]);
+
+  // Lists.
+  const std::span<const ConstraintIndex> listed_in_order = colouring.constraints_by_colour();
+  const std::span<const Colour> colour_of = colouring.colours();
+  const auto listed = std::make_unique<std::atomic<std::uint8_t>[]>(count);  // zeroed
+  const Findings lists = reduce_chunks(
+      listed_in_order.size(), [&](std::size_t begin, std::size_t end, Findings& found) {
+        Colour k = colour_at(offsets, begin);
+        for (std::size_t i = begin; i < end; ++i) {
+          while (i >= offsets[k + 1]) ++k;
+          const ConstraintIndex c = listed_in_order[i];
+          if (c >= count) {
+            found.out_of_range = std::min(found.out_of_range, i);
+            continue;
+          }
+          if (listed[c].exchange(1, std::memory_order_relaxed) != 0)
+            found.listed_twice = std::min<std::size_t>(found.listed_twice, c);
+          if (colour_of[c] != k) found.wrong_colour = std::min(found.wrong_colour, i);
         }
-      }
-      if (i + kAhead / 2 < listed_in_k.size()) {
-        const ConstraintIndex ahead = listed_in_k[i + kAhead / 2];
-        if (ahead < count) __builtin_prefetch(&members[member_offsets[ahead]]);
-      }
-      if (i + kAhead / 4 < listed_in_k.size()) {
-        const ConstraintIndex ahead = listed_in_k[i + kAhead / 4];
-        if (ahead < count)
-          for (std::uint32_t m = member_offsets[ahead]; m < member_offsets[ahead + 1]; ++m)
-            __builtin_prefetch(&last_use[members[m]]);
-      }
-      const ConstraintIndex c = listed_in_k[i];
-      if (c >= count) return fail("colour " + std::to_string(k) + " lists constraint " + std::to_string(c) + ", out of range");
-      if (listed[c]) return fail(graph.describe_constraint(c) + " is listed twice");
-      listed[c] = 1;
-      if (colouring.colour_of(c) != k)
-        return fail(graph.describe_constraint(c) + " is listed in colour " + std::to_string(k) +
-                    " but has colour " + std::to_string(colouring.colour_of(c)));
-      for (ParticleIndex p : graph.particles_of(c)) {
-        LastUse& last = last_use[p];
-        if (last.constraint != kUnused && last.colour == k)
-          return fail("colour " + std::to_string(k) + ": " + graph.describe_constraint(last.constraint) +
-                      " and " + graph.describe_constraint(c) + " share movable particle " +
-                      std::to_string(p));
-        last = {c, k};
-      }
-    }
+      });
+  if (lists.out_of_range != kNone) {
+    const std::size_t i = lists.out_of_range;
+    return fail("colour " + std::to_string(colour_at(offsets, i)) + " lists constraint " +
+                std::to_string(listed_in_order[i]) + ", out of range");
+  }
+  if (lists.listed_twice != kNone)
+    return fail(graph.describe_constraint(ConstraintIndex(lists.listed_twice)) +
+                " is listed twice");
+  if (lists.wrong_colour != kNone) {
+    const std::size_t i = lists.wrong_colour;
+    const ConstraintIndex c = listed_in_order[i];
+    return fail(graph.describe_constraint(c) + " is listed in colour " +
+                std::to_string(colour_at(offsets, i)) + " but has colour " +
+                std::to_string(colour_of[c]));
+  }
+
+  // Particles: the constraints of a movable particle in id order, their colours distinct.
+  const std::span<const std::uint32_t> incidence_offsets = graph.particle_offsets();
+  const std::span<const ConstraintIndex> incidence = graph.particle_constraints();
+  const auto first_clash = [&](std::size_t p) -> std::pair<ConstraintIndex, ConstraintIndex> {
+    const std::uint32_t first = incidence_offsets[p], last = incidence_offsets[p + 1];
+    for (std::uint32_t i = first + 1; i < last; ++i)
+      for (std::uint32_t j = first; j < i; ++j)
+        if (colour_of[incidence[i]] == colour_of[incidence[j]]) return {incidence[j], incidence[i]};
+    return {0, 0};
+  };
+  const Findings particles = reduce_chunks(
+      graph.particle_count(), [&](std::size_t begin, std::size_t end, Findings& found) {
+        if (found.shared != kNone) return;  // an earlier chunk of this range clashed
+        for (std::size_t p = begin; p < end; ++p) {
+          const std::uint32_t first = incidence_offsets[p], last = incidence_offsets[p + 1];
+          // Colours below 64 (nearly always) as bits of a mask; any other pair compared.
+          std::uint64_t seen = 0;
+          bool clash = false;
+          for (std::uint32_t i = first; i < last && !clash; ++i) {
+            const Colour k = colour_of[incidence[i]];
+            if (k >= 64) {
+              const auto [a, b] = first_clash(p);
+              clash = a != b;
+              break;
+            }
+            clash = (seen >> k) & 1u;
+            seen |= std::uint64_t(1) << k;
+          }
+          if (clash) {
+            found.shared = p;
+            return;
+          }
+        }
+      });
+  if (particles.shared != kNone) {
+    const std::size_t p = particles.shared;
+    const auto [a, b] = first_clash(p);
+    return fail("colour " + std::to_string(colour_of[a]) + ": " + graph.describe_constraint(a) +
+                " and " + graph.describe_constraint(b) + " share movable particle " +
+                std::to_string(p));
   }
   return {};
 }

@@ -1,7 +1,9 @@
 // Colouring (CSR by colour, particle permutation), validate() and the statistics.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <string>
 
 #include <tbb/task_arena.h>
 
@@ -84,6 +86,70 @@ TEST(Validate, FindsAClashDeepInALongColour) {
   EXPECT_FALSE(check.valid);
   EXPECT_NE(check.problem.find("colour 0: "), std::string::npos) << check.problem;
   EXPECT_NE(check.problem.find("share movable particle"), std::string::npos) << check.problem;
+}
+
+/// Colours renumbered densely in their order (a colour left empty by a move disappears).
+std::vector<Colour> compacted(std::vector<Colour> colours) {
+  std::vector<Colour> sorted = colours;
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  for (Colour& k : colours)
+    k = Colour(std::lower_bound(sorted.begin(), sorted.end(), k) - sorted.begin());
+  return colours;
+}
+
+/// The lowest movable particle two constraints of one colour share, by brute force.
+std::size_t lowest_shared_particle(const ConstraintGraph& graph, std::span<const Colour> colours) {
+  for (std::size_t p = 0; p < graph.particle_count(); ++p) {
+    const auto constraints = graph.constraints_of(ParticleIndex(p));
+    for (std::size_t i = 0; i < constraints.size(); ++i)
+      for (std::size_t j = 0; j < i; ++j)
+        if (colours[constraints[i]] == colours[constraints[j]]) return p;
+  }
+  return graph.particle_count();
+}
+
+TEST(Validate, NamesTheLowestSharedParticleOnAnyThreadCount) {
+  // Clashes far apart in a 160 × 160 cloth (25,600 particles: two of the check's chunks of
+  // 16,384): the message names the lowest particle shared, the same on 1, 2 and 4 threads.
+  const ConstraintGraph graph = test::cloth_graph(160, 160, true);
+  const Colouring plain = ColouringRegistry::with_builtin_strategies().get("greedy").colour(graph, {});
+  std::vector<Colour> clash(plain.colours().begin(), plain.colours().end());
+  for (const ParticleIndex p : {ParticleIndex(20000), ParticleIndex(5000), ParticleIndex(17000)}) {
+    const auto constraints = graph.constraints_of(p);
+    clash[constraints[1]] = clash[constraints[0]];
+  }
+  const Colouring broken = Colouring::from_colours(compacted(clash));
+  const std::size_t expected = lowest_shared_particle(graph, broken.colours());
+  ASSERT_LE(expected, 5000u);
+  for (const int threads : {1, 2, 4}) {
+    const ColouringValidation check =
+        tbb::task_arena(threads).execute([&] { return validate(graph, broken); });
+    EXPECT_FALSE(check.valid);
+    EXPECT_TRUE(check.problem.ends_with("share movable particle " + std::to_string(expected)))
+        << threads << " threads: " << check.problem;
+  }
+}
+
+TEST(Validate, FindsAClashAmongColoursPastSixtyFour) {
+  // Every constraint of a small cloth in its own colour (more than 64 colours), then two that
+  // share a particle put in one: found and named, as below 64.
+  const ConstraintGraph graph = test::cloth_graph(8, 8, true);
+  std::vector<Colour> own(graph.constraint_count());
+  for (std::size_t c = 0; c < own.size(); ++c) own[c] = Colour(c);
+  ASSERT_GT(own.size(), 100u);
+  EXPECT_TRUE(validate(graph, Colouring::from_colours(own)).valid);
+  const auto constraints = graph.constraints_of(ParticleIndex(45));
+  ASSERT_GE(constraints.size(), 2u);
+  std::vector<Colour> clash = own;
+  clash[constraints.back()] = clash[constraints.front()];
+  const Colouring broken = Colouring::from_colours(compacted(clash));
+  ASSERT_GT(broken.colour_of(constraints.front()), 64u);
+  const ColouringValidation check = validate(graph, broken);
+  EXPECT_FALSE(check.valid);
+  EXPECT_TRUE(check.problem.ends_with(
+      "share movable particle " + std::to_string(lowest_shared_particle(graph, broken.colours()))))
+      << check.problem;
 }
 
 TEST(Validate, SharingAStaticParticleIsNoConflict) {

@@ -24,6 +24,16 @@ Enum choose(const std::string& option, const std::string& value,
   throw InvalidInput(option + ": unknown value '" + value + "' (known: " + known + ")");
 }
 
+/// choose() of an option given, nothing of one left out.
+template <class Enum, std::size_t N>
+std::optional<Enum> choose_if_given(const std::string& option,
+                                    const std::optional<std::string>& value,
+                                    const std::array<std::string_view, N>& names) {
+  std::optional<Enum> chosen;
+  if (value) chosen.emplace(choose<Enum>(option, *value, names));
+  return chosen;
+}
+
 }  // namespace
 
 void add_scene_options(CLI::App& command, SceneOptions& options) {
@@ -60,20 +70,14 @@ void add_scene_options(CLI::App& command, SceneOptions& options) {
 
 io::SceneDescription describe_scene(const SceneOptions& options) {
   // The cheap checks of the overrides first, so a typo is reported before a big scene loads.
-  const auto shell_material =
-      options.shell_material ? std::optional(choose<io::ShellMaterial>(
-                                   "--shell-material", *options.shell_material, io::kShellMaterialNames))
-                             : std::nullopt;
-  const auto bending = options.bending ? std::optional(choose<io::ShellBending>(
-                                             "--bending", *options.bending, io::kShellBendingNames))
-                                       : std::nullopt;
-  const auto solid_material =
-      options.solid_material ? std::optional(choose<io::SolidMaterial>(
-                                   "--solid-material", *options.solid_material, io::kSolidMaterialNames))
-                             : std::nullopt;
-  const auto tethers = options.tethers ? std::optional(choose<io::TetherRule>(
-                                             "--tethers", *options.tethers, io::kTetherRuleNames))
-                                       : std::nullopt;
+  const auto shell_material = choose_if_given<io::ShellMaterial>(
+      "--shell-material", options.shell_material, io::kShellMaterialNames);
+  const auto bending =
+      choose_if_given<io::ShellBending>("--bending", options.bending, io::kShellBendingNames);
+  const auto solid_material = choose_if_given<io::SolidMaterial>(
+      "--solid-material", options.solid_material, io::kSolidMaterialNames);
+  const auto tethers =
+      choose_if_given<io::TetherRule>("--tethers", options.tethers, io::kTetherRuleNames);
   if (options.self_collision && *options.self_collision != "on" && *options.self_collision != "off")
     throw InvalidInput("--self-collision: unknown value '" + *options.self_collision +
                        "' (known: on, off)");

@@ -4,11 +4,11 @@
 // Start-up: startup/graph/<scene>, startup/graph+<strategy>/<scene> time what a run pays
 // before its first step, constraint_graph(model) and then the strategy, on the tool's scenes
 // (io::build_scene, so the model's families and their slot arrays are the solver's):
-// cloth1024 and cloth256 (distance + dihedral, no tethers: 6.3 M and 0.39 M constraints),
-// cloth1024_tethers (the tool's default cloth:1024, 8.4 M), cloth256_distance (distance only,
-// 0.2 M), fembar (bar:20x20x80, FEM tetrahedra, 0.19 M) and bar (FEM tetrahedra of a
-// 40x40x160-cell bar, 1.5 M: the strain bar's graph, one four-particle constraint per
-// tetrahedron), none with tethers. startup/tool/<scene> is what `tessera run`
+// cloth1024_tethers (the tool's default cloth:1024, 8.4 M) and, without tethers, cloth1024
+// and cloth256 (distance + dihedral: 6.3 M and 0.39 M constraints), cloth256_distance
+// (distance only, 0.2 M), fembar (bar:20x20x80, FEM tetrahedra, 0.19 M) and bar (FEM
+// tetrahedra of a 40x40x160-cell bar, 1.5 M: the strain bar's graph, one four-particle
+// constraint per tetrahedron). startup/tool/<scene> is what `tessera run`
 // pays: the graph, the default strategy (stencil), the locality order and the validation
 // (run_colouring with ColouringOptions::locality).
 //

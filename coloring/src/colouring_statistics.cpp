@@ -10,7 +10,9 @@
 //
 // The particle pass reads each particle's constraints in id order, so colour_of is read in a
 // few forward streams; walking the colours instead read it, the particle lists and a
-// per-particle stamp in no order at all (0.3 s of the 1024² cloth's start-up).
+// per-particle stamp in no order at all (0.3 s of the 1024² cloth's start-up). It needs the
+// graph's particle → constraint direction, which it builds if nothing has yet (the locality
+// pass, which `tessera run` runs first, builds it too).
 #include <tessera/coloring/colouring_statistics.hpp>
 
 #include <algorithm>
@@ -21,6 +23,7 @@
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -84,7 +87,8 @@ ColouringValidation validate(const ConstraintGraph& graph, const Colouring& colo
   for (Colour k = 0; k < colouring.colour_count(); ++k)
     if (colouring.colour_size(k) == 0) return fail("colour " + std::to_string(k) + " is empty");
 
-  // Lists.
+  // Lists. Colouring's constructors build the lists from colour_of, so these checks guard
+  // against a Colouring put together some other way; no public path reaches them.
   const std::span<const ConstraintIndex> listed_in_order = colouring.constraints_by_colour();
   const std::span<const Colour> colour_of = colouring.colours();
   const auto listed = std::make_unique<std::atomic<std::uint8_t>[]>(count);  // zeroed
@@ -122,6 +126,8 @@ ColouringValidation validate(const ConstraintGraph& graph, const Colouring& colo
   // Particles: the constraints of a movable particle in id order, their colours distinct.
   const std::span<const std::uint32_t> incidence_offsets = graph.particle_offsets();
   const std::span<const ConstraintIndex> incidence = graph.particle_constraints();
+  // The first pair (in incidence order) of p's constraints with one colour: for the message,
+  // once.
   const auto first_clash = [&](std::size_t p) -> std::pair<ConstraintIndex, ConstraintIndex> {
     const std::uint32_t first = incidence_offsets[p], last = incidence_offsets[p + 1];
     for (std::uint32_t i = first + 1; i < last; ++i)
@@ -131,21 +137,27 @@ ColouringValidation validate(const ConstraintGraph& graph, const Colouring& colo
   };
   const Findings particles = reduce_chunks(
       graph.particle_count(), [&](std::size_t begin, std::size_t end, Findings& found) {
-        if (found.shared != kNone) return;  // an earlier chunk of this range clashed
+        // `found` holds what this body found in its earlier ranges, all of lower particles
+        // (parallel_reduce hands a body the ranges to its right only), so after a clash there
+        // is nothing lower left to find here.
+        if (found.shared != kNone) return;
+        std::vector<Colour> colours;  // a particle's colours, when one is 64 or more
         for (std::size_t p = begin; p < end; ++p) {
           const std::uint32_t first = incidence_offsets[p], last = incidence_offsets[p + 1];
-          // Colours below 64 (nearly always) as bits of a mask; any other pair compared.
+          // Colours below 64 (nearly always) as bits of a mask; else sorted and compared.
           std::uint64_t seen = 0;
-          bool clash = false;
-          for (std::uint32_t i = first; i < last && !clash; ++i) {
+          bool clash = false, wide = false;
+          for (std::uint32_t i = first; i < last && !clash && !wide; ++i) {
             const Colour k = colour_of[incidence[i]];
-            if (k >= 64) {
-              const auto [a, b] = first_clash(p);
-              clash = a != b;
-              break;
-            }
-            clash = (seen >> k) & 1u;
-            seen |= std::uint64_t(1) << k;
+            wide = k >= 64;
+            clash = !wide && ((seen >> k) & 1u);
+            seen |= wide ? 0 : std::uint64_t(1) << k;
+          }
+          if (wide) {
+            colours.clear();
+            for (std::uint32_t i = first; i < last; ++i) colours.push_back(colour_of[incidence[i]]);
+            std::sort(colours.begin(), colours.end());
+            clash = std::adjacent_find(colours.begin(), colours.end()) != colours.end();
           }
           if (clash) {
             found.shared = p;

@@ -61,7 +61,8 @@ std::vector<ParticleIndex> reverse_cuthill_mckee_order(const ConstraintGraph& gr
     for (std::size_t head = component_begin; head < order.size(); ++head) {
       // (Written out here: GCC 12 dropped the prefetches when they sat in a lambda.)
       const std::size_t queued = order.size();
-      if (head + 4 * kAhead < queued) __builtin_prefetch(&incidence_offsets[order[head + 4 * kAhead]]);
+      if (head + 4 * kAhead < queued)
+        __builtin_prefetch(&incidence_offsets[order[head + 4 * kAhead]]);
       if (head + 3 * kAhead < queued)
         __builtin_prefetch(&incidence[incidence_offsets[order[head + 3 * kAhead]]]);
       if (head + 2 * kAhead < queued) {

@@ -238,7 +238,9 @@ inline void sort_small(ParticleIndex* v, std::size_t n) {
 /// first. Up to four particles whose offsets are below 2^20 (every generated mesh, and most
 /// read ones after a locality order) are packed exactly into a key with the top bit set;
 /// anything else is keyed by the hash of the shape. Hashing every constraint cost half the
-/// stencil order's time; a class's hash (by which classes are ranked) is now taken once.
+/// stencil order's time; the hash by which classes are ranked is now taken once per class,
+/// from its first constraint. (A hash key equal to a packed key of another shape would join
+/// the two shapes in one class: a 2^-64 chance per pair, as two shapes of one hash before.)
 constexpr unsigned kOffsetBits = 20;
 constexpr std::uint64_t kPackedShape = std::uint64_t(1) << 63;
 
@@ -259,16 +261,20 @@ std::uint64_t shape_key(std::size_t n, const ParticleIndex* sorted) {
   return key;
 }
 
-/// The hash of the shape behind a key (shape_hash's value, for either kind of key). A hash
-/// that happens to have the packed bit set would be taken for a packed key here and in the
-/// class table: a 2^-64 chance per class, as for two shapes of one hash before.
-std::uint64_t hash_of_shape_key(std::uint64_t key) {
-  if (!(key & kPackedShape)) return key;
-  const std::size_t n = (key >> 60) & 7;
-  ParticleIndex offsets[4] = {0, 0, 0, 0};
-  for (std::size_t i = 1; i < n; ++i)
-    offsets[i] = ParticleIndex((key >> (kOffsetBits * (i - 1))) & ((1u << kOffsetBits) - 1));
-  return shape_hash(n, offsets);
+/// Constraint c's particles, sorted, in `small` (or in `large` beyond its eight).
+const ParticleIndex* sorted_particles(const std::uint32_t* offsets,
+                                      const ParticleIndex* incidences, std::size_t c,
+                                      ParticleIndex (&small)[8],
+                                      std::vector<ParticleIndex>& large) {
+  const std::size_t n = offsets[c + 1] - offsets[c];
+  ParticleIndex* sorted = small;
+  if (n > 8) {
+    large.resize(n);
+    sorted = large.data();
+  }
+  std::copy(incidences + offsets[c], incidences + offsets[c + 1], sorted);
+  sort_small(sorted, n);
+  return sorted;
 }
 
 /// Shape classes: distinct shape keys with their size and arity, found through an
@@ -277,19 +283,20 @@ std::uint64_t hash_of_shape_key(std::uint64_t key) {
 class ShapeClasses {
  public:
   struct Class {
-    std::uint64_t shape;
+    std::uint64_t shape;  // the key until the classes are ranked, then the shape's hash
     std::uint32_t size;
     std::uint32_t arity;
+    std::size_t first;  // the class's first constraint
   };
   ShapeClasses() : slots_(std::size_t(1) << 10, kEmpty) {}
 
-  std::uint32_t add(std::uint64_t shape, std::uint32_t arity) {
+  std::uint32_t add(std::uint64_t shape, std::uint32_t arity, std::size_t constraint) {
     std::size_t mask = slots_.size() - 1;
     for (std::size_t s = slot_of(shape) & mask;; s = (s + 1) & mask) {
       const std::uint32_t k = slots_[s];
       if (k == kEmpty) {
         const auto id = static_cast<std::uint32_t>(classes_.size());
-        classes_.push_back({shape, 1, arity});
+        classes_.push_back({shape, 1, arity, constraint});
         slots_[s] = id;
         if (2 * classes_.size() > slots_.size()) grow();
         return id;
@@ -372,19 +379,12 @@ LargeBuffer<ConstraintIndex> stencil_order(const ConstraintGraph& graph) {
   LargeBuffer<std::uint64_t> shape(count);
   LargeBuffer<ParticleIndex> anchor(count);
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
-    constexpr std::size_t kSmall = 8;
-    ParticleIndex small[kSmall];
+    ParticleIndex small[8];
     std::vector<ParticleIndex> large;
     const std::size_t end = std::min(count, (chunk + 1) * kStencilChunk);
     for (std::size_t c = chunk * kStencilChunk; c < end; ++c) {
       const std::size_t n = offsets[c + 1] - offsets[c];
-      ParticleIndex* sorted = small;
-      if (n > kSmall) {
-        large.resize(n);
-        sorted = large.data();
-      }
-      std::copy(incidences + offsets[c], incidences + offsets[c + 1], sorted);
-      sort_small(sorted, n);
+      const ParticleIndex* sorted = sorted_particles(offsets, incidences, c, small, large);
       shape[c] = shape_key(n, sorted);
       anchor[c] = n > 0 ? sorted[0] : 0;
     }
@@ -401,14 +401,19 @@ LargeBuffer<ConstraintIndex> stencil_order(const ConstraintGraph& graph) {
       if (shape[c] == previous_shape && previous_class != ~std::uint32_t(0)) {
         ++table.classes()[previous_class].size;
       } else {
-        previous_class = table.add(shape[c], offsets[c + 1] - offsets[c]);
+        previous_class = table.add(shape[c], offsets[c + 1] - offsets[c], c);
         previous_shape = shape[c];
       }
       class_of[c] = previous_class;
     }
   }
   std::vector<ShapeClasses::Class>& classes = table.classes();
-  for (ShapeClasses::Class& k : classes) k.shape = hash_of_shape_key(k.shape);  // for ranking
+  {  // Each class ranked by its shape's hash, taken from its first constraint.
+    ParticleIndex small[8];
+    std::vector<ParticleIndex> large;
+    for (ShapeClasses::Class& k : classes)
+      k.shape = shape_hash(k.arity, sorted_particles(offsets, incidences, k.first, small, large));
+  }
 
   // 3. Rank: small classes of one arity share a catch-all rank placed after that arity's
   // patterns. Catch-alls are modelled as a class of size 0 per arity.

@@ -125,6 +125,9 @@ TetherConstraints make_long_range_attachments(std::span<const Vector3r> rest_pos
     queue.pop();
     if (settled_count[p] == wanted || has(p, a)) continue;
     settled[p * wanted + settled_count[p]++] = {a, d};
+    // A settled pair is never queued again (has() above): its slot is free for another.
+    for (std::size_t k = 0; k < wanted; ++k)
+      if (queued[p * wanted + k].attachment == a) queued[p * wanted + k].attachment = kNoParticle;
     for (std::uint32_t k = graph.offsets[p]; k < graph.offsets[p + 1]; ++k) {
       const ParticleIndex q = graph.neighbours[k];
       if (!(inverse_masses[q] > 0) || settled_count[q] == wanted || has(q, a)) continue;

@@ -65,10 +65,11 @@ TEST(Validate, FindsTwoConstraintsOfOneColourSharingAMovableParticle) {
 }
 
 TEST(Validate, FindsAClashDeepInALongColour) {
-  // validate() reads ahead of the constraint it checks; a clash far into a colour of
-  // thousands, in the particle order improve_locality gives it, is still found and named.
+  // A clash far into a colour of thousands, in the particle order improve_locality gives it,
+  // is found and named.
   const ConstraintGraph graph = test::cloth_graph(60, 60, true);
-  const Colouring plain = ColouringRegistry::with_builtin_strategies().get("greedy").colour(graph, {});
+  const Colouring plain =
+      ColouringRegistry::with_builtin_strategies().get("greedy").colour(graph, {});
   const Colouring local = improve_locality(graph, plain);
   ASSERT_TRUE(validate(graph, local).valid);
   ASSERT_GT(local.colour_size(0), 1000u);
@@ -113,7 +114,8 @@ TEST(Validate, NamesTheLowestSharedParticleOnAnyThreadCount) {
   // Clashes far apart in a 160 × 160 cloth (25,600 particles: two of the check's chunks of
   // 16,384): the message names the lowest particle shared, the same on 1, 2 and 4 threads.
   const ConstraintGraph graph = test::cloth_graph(160, 160, true);
-  const Colouring plain = ColouringRegistry::with_builtin_strategies().get("greedy").colour(graph, {});
+  const Colouring plain =
+      ColouringRegistry::with_builtin_strategies().get("greedy").colour(graph, {});
   std::vector<Colour> clash(plain.colours().begin(), plain.colours().end());
   for (const ParticleIndex p : {ParticleIndex(20000), ParticleIndex(5000), ParticleIndex(17000)}) {
     const auto constraints = graph.constraints_of(p);

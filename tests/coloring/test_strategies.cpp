@@ -626,6 +626,27 @@ std::vector<Colour> reference_stencil_colours(const ConstraintGraph& graph) {
   return colours;
 }
 
+/// Shapes the stencil order keys by their hash, not packed: several five-particle shapes of 100
+/// constraints each, and two-particle shapes whose offset is past 2^20, 64 of each. Classes
+/// of one arity and size are ranked by their hashes, so these pin down that ranking.
+ConstraintGraph hashed_shapes_graph() {
+  std::vector<ParticleIndex> five, far;
+  const std::vector<std::vector<ParticleIndex>> offsets = {
+      {0, 1, 2, 3, 4}, {0, 1, 2, 3, 5}, {0, 2, 3, 5, 8}, {0, 1, 4, 6, 7}, {0, 3, 4, 5, 9}};
+  for (std::size_t shape = 0; shape < offsets.size(); ++shape)
+    for (ParticleIndex p = 0; p < 100; ++p)
+      for (const ParticleIndex o : offsets[shape])
+        five.push_back(ParticleIndex(200 * shape) + p + o);
+  constexpr ParticleIndex kFar = ParticleIndex(1) << 20;
+  for (ParticleIndex p = 0; p < 64; ++p)
+    for (const ParticleIndex o : {kFar + 1, kFar + 2, kFar + 3})
+      far.insert(far.end(), {ParticleIndex(2000 + 3 * p), ParticleIndex(2000 + 3 * p + o)});
+  const std::vector<Real> inverse_masses(std::size_t(kFar) + 2300, Real(1));
+  const std::vector<ConstraintGroup> groups = {ConstraintGroup::fixed_arity("five", 5, five),
+                                               ConstraintGroup::fixed_arity("far", 2, far)};
+  return ConstraintGraph(inverse_masses, groups);
+}
+
 TEST(Stencil, EqualsFirstFitInRankAnchorIdOrderForAnyThreadCount) {
   std::vector<std::pair<std::string, ConstraintGraph>> graphs;
   for (const auto& mesh : meshes()) graphs.emplace_back(mesh.name, ConstraintGraph(mesh.graph));
@@ -635,6 +656,7 @@ TEST(Stencil, EqualsFirstFitInRankAnchorIdOrderForAnyThreadCount) {
   std::vector<ParticleIndex> edges, bending;
   graphs.emplace_back("shuffled cloth 120x120", shuffled_cloth_with_bending(120, 120, 7, edges, bending));
   graphs.emplace_back("tet bar 30x8x8", test::tet_bar_graph(30, 8, 8));
+  graphs.emplace_back("hashed shapes", hashed_shapes_graph());
   for (const auto& [name, graph] : graphs) {
     const std::vector<Colour> expected = reference_stencil_colours(graph);
     for (int threads : {1, 2}) {

@@ -275,7 +275,8 @@ TEST(LongRangeAttachments, SeveralAttachmentsNearestFirstHoldATautChainStraight)
             10u);
 }
 
-/// A side × side grid (rows 1.3 apart, columns spaced unevenly so that no two paths tie)
+/// A side × side grid (rows 1.3 apart, columns spaced unevenly, so that no particle is as far
+/// from two attachments)
 /// with structural and shear edges, fixed at `fixed`: every particle's k-th attachment and
 /// reach, for k = 1 .. max_k, must equal a brute-force shortest path from each attachment,
 /// sorted by (length, number).

@@ -29,24 +29,16 @@ std::vector<ParticleIndex> reverse_cuthill_mckee_order(const ConstraintGraph& gr
   order.reserve(n);
   std::vector<std::uint8_t> placed(n, 0);
   std::vector<ParticleIndex> seen_by(n, kUnplaced);
-  // Start candidates: movable particles with constraints, by increasing degree then index
-  // (a counting sort by degree, stable in the index).
-  std::vector<ParticleIndex> starts;
-  {
-    std::vector<std::uint32_t> first_of_degree;
-    for (std::size_t p = 0; p < n; ++p) {
-      const auto ip = static_cast<ParticleIndex>(p);
-      if (!graph.is_movable(ip) || degree(ip) == 0) continue;
-      if (degree(ip) + 1 >= first_of_degree.size()) first_of_degree.resize(degree(ip) + 2, 0);
-      ++first_of_degree[degree(ip) + 1];
-    }
-    std::partial_sum(first_of_degree.begin(), first_of_degree.end(), first_of_degree.begin());
-    starts.resize(first_of_degree.empty() ? 0 : first_of_degree.back());
-    for (std::size_t p = 0; p < n; ++p) {
-      const auto ip = static_cast<ParticleIndex>(p);
-      if (graph.is_movable(ip) && degree(ip) != 0) starts[first_of_degree[degree(ip)]++] = ip;
-    }
-  }
+  // Start candidates: movable particles with constraints (a static particle's list is empty),
+  // by increasing degree then index: a counting sort by degree, stable in the index. No
+  // movable particle has more constraints than the colour lower bound.
+  std::vector<std::uint32_t> first_of_degree(graph.colour_lower_bound() + 2, 0);
+  for (ParticleIndex p = 0; p < n; ++p)
+    if (degree(p) != 0) ++first_of_degree[degree(p) + 1];
+  std::partial_sum(first_of_degree.begin(), first_of_degree.end(), first_of_degree.begin());
+  std::vector<ParticleIndex> starts(first_of_degree.back());
+  for (ParticleIndex p = 0; p < n; ++p)
+    if (degree(p) != 0) starts[first_of_degree[degree(p)]++] = p;
   // The walk reads, per particle, its constraint list, each constraint's particle range and
   // the particles: three dependent loads from arrays far larger than the cache (0.5 s of the
   // 1024² cloth's start-up). The queue ahead of the head is known, so each level is

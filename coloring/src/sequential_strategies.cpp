@@ -283,10 +283,11 @@ const ParticleIndex* sorted_particles(const std::uint32_t* offsets,
 class ShapeClasses {
  public:
   struct Class {
-    std::uint64_t shape;  // the key until the classes are ranked, then the shape's hash
+    std::uint64_t shape;  // the key (shape_key)
     std::uint32_t size;
     std::uint32_t arity;
     std::size_t first;  // the class's first constraint
+    std::uint64_t hash;  // the shape's hash (shape_hash), taken before the classes are ranked
   };
   ShapeClasses() : slots_(std::size_t(1) << 10, kEmpty) {}
 
@@ -296,7 +297,7 @@ class ShapeClasses {
       const std::uint32_t k = slots_[s];
       if (k == kEmpty) {
         const auto id = static_cast<std::uint32_t>(classes_.size());
-        classes_.push_back({shape, 1, arity, constraint});
+        classes_.push_back({shape, 1, arity, constraint, 0});
         slots_[s] = id;
         if (2 * classes_.size() > slots_.size()) grow();
         return id;
@@ -412,7 +413,7 @@ LargeBuffer<ConstraintIndex> stencil_order(const ConstraintGraph& graph) {
     ParticleIndex small[8];
     std::vector<ParticleIndex> large;
     for (ShapeClasses::Class& k : classes)
-      k.shape = shape_hash(k.arity, sorted_particles(offsets, incidences, k.first, small, large));
+      k.hash = shape_hash(k.arity, sorted_particles(offsets, incidences, k.first, small, large));
   }
 
   // 3. Rank: small classes of one arity share a catch-all rank placed after that arity's
@@ -427,7 +428,7 @@ LargeBuffer<ConstraintIndex> stencil_order(const ConstraintGraph& graph) {
     const std::uint32_t sa = effective_size(a), sb = effective_size(b);
     if (sa != sb) return sa > sb;
     if (sa == 0) return false;  // both catch-all: same rank
-    return classes[a].shape < classes[b].shape;
+    return classes[a].hash < classes[b].hash;
   });
   std::vector<std::uint32_t> rank_of_class(classes.size());
   std::uint32_t rank = 0;
